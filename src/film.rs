@@ -1,0 +1,186 @@
+//! The film: per-pixel running mean and sum of squared deviations (Welford) of linear radiance in
+//! f64, with a per-pixel sample count, so each pixel's standard error is known at any time.
+//!
+//! Memory: 24 (mean) + 24 (M2) + 4 (count) = 52 bytes per pixel, stored as separate arrays so
+//! nothing is padded; a snapshot adds 12 (f32 RGB), within the 64-byte budget.
+
+use crate::math::DVec3;
+use rayon::prelude::*;
+
+#[derive(Clone, Debug)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    mean: Vec<[f64; 3]>,
+    m2: Vec<[f64; 3]>,
+    count: Vec<u32>,
+}
+
+/// Whole-image error estimate from the per-pixel standard errors (DESIGN.md's metrics).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ErrorEstimate {
+    /// sqrt(mean over pixels and channels of var / n): the RMSE the image is expected to have
+    /// against the converged one.
+    pub rmse: f64,
+    /// mean over pixels and channels of (var / n) / (mean^2 + 0.01).
+    pub rel_mse: f64,
+}
+
+impl ErrorEstimate {
+    /// sqrt(rel_mse): the relative error used by `--target-error`.
+    pub fn relative(&self) -> f64 {
+        self.rel_mse.sqrt()
+    }
+}
+
+/// A mutable view of a band of rows, handed to one render task.
+pub struct FilmRows<'a> {
+    pub first_row: u32,
+    pub width: u32,
+    mean: &'a mut [[f64; 3]],
+    m2: &'a mut [[f64; 3]],
+    count: &'a mut [u32],
+}
+
+impl FilmRows<'_> {
+    /// Add one sample to pixel (x, first_row + row). Welford's update: numerically stable
+    /// however many samples, unlike a running sum of squares.
+    #[inline]
+    pub fn add(&mut self, x: u32, row: u32, v: DVec3) {
+        let i = (row * self.width + x) as usize;
+        self.count[i] += 1;
+        let n = self.count[i] as f64;
+        let mean = &mut self.mean[i];
+        let m2 = &mut self.m2[i];
+        for c in 0..3 {
+            let delta = v[c] - mean[c];
+            mean[c] += delta / n;
+            m2[c] += delta * (v[c] - mean[c]);
+        }
+    }
+
+    pub fn rows(&self) -> u32 {
+        (self.count.len() / self.width as usize) as u32
+    }
+}
+
+impl Film {
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Film {
+            width,
+            height,
+            mean: vec![[0.0; 3]; n],
+            m2: vec![[0.0; 3]; n],
+            count: vec![0; n],
+        }
+    }
+
+    pub fn pixels(&self) -> usize {
+        self.count.len()
+    }
+
+    /// Split the film into bands of `rows` rows for parallel accumulation (no locks: each task
+    /// owns its rows).
+    pub fn par_bands(&mut self, rows: u32) -> impl IndexedParallelIterator<Item = FilmRows<'_>> {
+        let width = self.width;
+        let chunk = (rows * width) as usize;
+        self.mean
+            .par_chunks_mut(chunk)
+            .zip(self.m2.par_chunks_mut(chunk))
+            .zip(self.count.par_chunks_mut(chunk))
+            .enumerate()
+            .map(move |(band, ((mean, m2), count))| FilmRows {
+                first_row: band as u32 * rows,
+                width,
+                mean,
+                m2,
+                count,
+            })
+    }
+
+    #[inline]
+    pub fn mean(&self, i: usize) -> DVec3 {
+        DVec3::from_array(self.mean[i])
+    }
+
+    #[inline]
+    pub fn count(&self, i: usize) -> u32 {
+        self.count[i]
+    }
+
+    /// Variance of pixel i's mean (per channel); infinite with fewer than two samples.
+    #[inline]
+    pub fn variance_of_mean(&self, i: usize) -> DVec3 {
+        let n = self.count[i] as f64;
+        if n < 2.0 {
+            return DVec3::splat(f64::INFINITY);
+        }
+        DVec3::from_array(self.m2[i]) / ((n - 1.0) * n)
+    }
+
+    /// Smallest and largest per-pixel sample counts.
+    pub fn count_range(&self) -> (u32, u32) {
+        let lo = self.count.par_iter().copied().min().unwrap_or(0);
+        let hi = self.count.par_iter().copied().max().unwrap_or(0);
+        (lo, hi)
+    }
+
+    pub fn error_estimate(&self) -> ErrorEstimate {
+        let (se, rel) = (0..self.pixels())
+            .into_par_iter()
+            .map(|i| {
+                let v = self.variance_of_mean(i);
+                if !v.is_finite() {
+                    return (f64::INFINITY, f64::INFINITY);
+                }
+                let m = self.mean(i);
+                let rel = v / (m * m + DVec3::splat(0.01));
+                (v.element_sum(), rel.element_sum())
+            })
+            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        let n = (self.pixels() * 3).max(1) as f64;
+        ErrorEstimate {
+            rmse: (se / n).sqrt(),
+            rel_mse: rel / n,
+        }
+    }
+
+    /// The mean image as linear f32 RGB, row 0 at the top.
+    pub fn mean_rgb_f32(&self) -> Vec<f32> {
+        self.mean
+            .par_iter()
+            .flat_map_iter(|m| m.map(|c| c as f32))
+            .collect()
+    }
+
+    /// Per-pixel standard error of the mean (RMS over channels), linear f32.
+    pub fn std_error_f32(&self) -> Vec<f32> {
+        (0..self.pixels())
+            .into_par_iter()
+            .map(|i| {
+                let v = self.variance_of_mean(i);
+                (v.element_sum() / 3.0).sqrt() as f32
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn welford_matches_two_pass_statistics() {
+        let mut film = Film::new(1, 1);
+        let xs = [1e6 + 1.0, 1e6 + 2.0, 1e6 + 3.0, 1e6 + 4.0];
+        for x in xs {
+            film.par_bands(1)
+                .for_each(|mut band| band.add(0, 0, DVec3::splat(x)));
+        }
+        let mean = xs.iter().sum::<f64>() / 4.0;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 3.0;
+        assert_eq!(film.mean(0).x, mean);
+        assert!((film.variance_of_mean(0).x - var / 4.0).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,79 @@
+//! Shapes, hit records, and the one place that decides where a new ray starts.
+//!
+//! Every intersection reports an absolute bound on the error of its hit point (`Hit::err`). A new
+//! ray starts off the surface by a multiple of that bound, on the side it leaves towards, so the
+//! offset scales with the coordinates (a hit at 1e6 from the origin is offset ~1e6 times more than
+//! one at 1) instead of relying on a fixed epsilon that is too large for tiny scenes and too small
+//! for huge ones.
+
+pub mod sphere;
+
+use crate::math::DVec3;
+pub use sphere::Sphere;
+
+/// A surface interaction.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Distance along the (unit) ray direction.
+    pub t: f64,
+    /// Hit point, projected back onto the surface.
+    pub p: DVec3,
+    /// Geometric unit normal, pointing out of the shape (for spheres, away from the centre).
+    pub n: DVec3,
+    /// Index of the primitive in the scene.
+    pub prim: u32,
+    /// Absolute bound on the rounding error of each coordinate of `p`.
+    pub err: f64,
+}
+
+/// How many error bounds a spawned origin sits off the surface. The bounds are already
+/// conservative; the factor covers the error of the *next* intersection test deciding which side
+/// of the surface the origin is on (derived in `sphere::Sphere::intersect`).
+const OFFSET_SAFETY: f64 = 4.0;
+
+/// Origin for a ray leaving surface point `p` (normal `n`, error bound `err`) in direction `d`.
+#[inline]
+pub fn spawn_origin(p: DVec3, n: DVec3, err: f64, d: DVec3) -> DVec3 {
+    let offset = n * (err * OFFSET_SAFETY);
+    if d.dot(n) >= 0.0 {
+        p + offset
+    } else {
+        p - offset
+    }
+}
+
+/// Axis-aligned bounding box, used by the accelerators and by the scene's extent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb {
+        min: DVec3::splat(f64::INFINITY),
+        max: DVec3::splat(f64::NEG_INFINITY),
+    };
+
+    pub fn union(self, o: Aabb) -> Aabb {
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    pub fn grow(self, p: DVec3) -> Aabb {
+        Aabb {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
+    }
+
+    pub fn centroid(&self) -> DVec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    pub fn contains(&self, o: &Aabb) -> bool {
+        self.min.cmple(o.min).all() && self.max.cmpge(o.max).all()
+    }
+}

@@ -1,0 +1,55 @@
+//! Estimators of the radiance arriving along a camera ray. Each is a plain function over the
+//! immutable scene and a per-sample [`Sampler`]; the closed set is dispatched by one `match`.
+
+pub mod naive;
+pub mod path;
+
+use crate::math::{max_component, DVec3, Ray};
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use crate::settings::{IntegratorKind, RenderSettings};
+
+/// Survival probability never exceeds this, so a path whose throughput stays at 1 (a camera in a
+/// closed mirror box, glass of colour 1 trapping a path by total internal reflection) still ends:
+/// expected length at most 1024 bounces. It is 1 - 2^-10 rather than smaller so a furnace of
+/// albedo 0.999 keeps its natural survival rate (0.999 < 0.99902): capping below the albedo would
+/// make the roulette weights grow faster than survival falls, with unbounded variance.
+pub const MAX_SURVIVAL: f64 = 1.0 - 1.0 / 1024.0;
+
+/// Russian roulette starts after this many bounces (the first bounces carry most of the image).
+pub const RR_START_DEPTH: u32 = 2;
+
+/// Unbiased Russian roulette: continue with probability q = min(max(beta), MAX_SURVIVAL) and
+/// divide beta by q. Returns false when the path ends.
+#[inline]
+pub fn russian_roulette(beta: &mut DVec3, depth: u32, u: f64) -> bool {
+    if depth < RR_START_DEPTH {
+        return true;
+    }
+    let q = max_component(*beta).min(MAX_SURVIVAL);
+    if !(q > 0.0) || u >= q {
+        return false;
+    }
+    *beta /= q;
+    true
+}
+
+/// The path length limit from settings (u32::MAX when unlimited).
+pub fn depth_limit(settings: &RenderSettings) -> u32 {
+    settings.max_depth.unwrap_or(u32::MAX)
+}
+
+/// Radiance along `ray` by the chosen integrator.
+#[inline]
+pub fn radiance(
+    kind: IntegratorKind,
+    scene: &Scene,
+    ray: Ray,
+    sampler: &mut Sampler,
+    max_depth: u32,
+) -> DVec3 {
+    match kind {
+        IntegratorKind::Path => path::radiance(scene, ray, sampler, max_depth),
+        IntegratorKind::Naive => naive::radiance(scene, ray, sampler, max_depth),
+    }
+}

@@ -1,0 +1,90 @@
+//! Unbiased path tracing with next-event estimation combined with BSDF sampling by multiple
+//! importance sampling (power heuristic), after pbrt-v4's `PathIntegrator`.
+//!
+//! At each non-delta vertex one light is chosen by power and a direction towards it sampled; its
+//! contribution is weighted by w_light = p_light^2 / (p_light^2 + p_bsdf^2). The BSDF-sampled
+//! continuation, if it hits an emitter, adds the emission weighted by the complementary
+//! w_bsdf. After a delta bounce (mirror, glass) light sampling could not have found the path, so
+//! the emission counts in full.
+
+use super::russian_roulette;
+use crate::geometry::spawn_origin;
+use crate::math::{DVec3, Ray};
+use crate::sampling::warp::power_heuristic;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u32) -> DVec3 {
+    let mut l = DVec3::ZERO;
+    let mut beta = DVec3::ONE;
+    let mut depth = 0u32;
+    // Whether the previous bounce was a delta lobe (the camera counts as one).
+    let mut specular = true;
+    let mut prev_p = ray.o;
+    let mut prev_pdf_bsdf = 0.0;
+    let nee = scene.has_lights();
+    loop {
+        let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
+            l += beta * scene.background;
+            break;
+        };
+        let material = scene.material(&hit);
+        let prim = &scene.prims[hit.prim as usize];
+
+        if material.is_emissive() {
+            let weight = match prim.light {
+                Some(light) if !specular && nee => {
+                    let pdf_light = scene.lights.pdf(light as usize, prev_p, ray.d);
+                    power_heuristic(prev_pdf_bsdf, pdf_light)
+                }
+                _ => 1.0,
+            };
+            l += beta * material.emission * weight;
+        }
+        if depth >= max_depth {
+            break;
+        }
+        let wo = -ray.d;
+
+        if nee && !material.is_delta() {
+            let u_light = sampler.get_1d();
+            let u = sampler.get_2d();
+            if let Some(ls) = scene.lights.sample(hit.p, u_light, u) {
+                let e = material.eval(wo, ls.wi, hit.n);
+                if e.f_cos.max_element() > 0.0 && ls.pdf > 0.0 {
+                    // Visible if the first thing along the shadow ray is the sampled light
+                    // itself: no distance tolerance, so light cannot leak where a light sphere
+                    // grazes a wall (smallpt's ceiling).
+                    let shadow = Ray::new(spawn_origin(hit.p, hit.n, hit.err, ls.wi), ls.wi);
+                    if scene
+                        .intersect(&shadow, f64::INFINITY)
+                        .is_some_and(|h| h.prim == ls.prim)
+                    {
+                        let w = power_heuristic(ls.pdf, e.pdf);
+                        l += beta * e.f_cos * ls.le * (w / ls.pdf);
+                    }
+                }
+            }
+        } else if nee {
+            // Keep the dimension count per bounce fixed so samplers stay aligned.
+            sampler.get_1d();
+            sampler.get_2d();
+        }
+
+        let u_lobe = sampler.get_1d();
+        let u = sampler.get_2d();
+        let Some(bs) = material.sample(wo, hit.n, u_lobe, u) else {
+            break;
+        };
+        beta *= bs.weight;
+        specular = bs.delta;
+        prev_pdf_bsdf = bs.pdf;
+        prev_p = hit.p;
+        depth += 1;
+        if !russian_roulette(&mut beta, depth, sampler.get_1d()) {
+            break;
+        }
+        ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
+    }
+    l
+}

@@ -1,0 +1,151 @@
+//! Materials: a closed set dispatched by `match`, each able to sample a direction (with the
+//! weight f cos / pdf) and, for the non-delta ones, to evaluate f cos and the pdf for MIS.
+//!
+//! ```toml
+//! [[sphere]]
+//! material = "glass"   # diffuse (default) | mirror | glass
+//! color = 0.999        # reflectance / transmittance tint; a number or [r, g, b]
+//! ior = 1.5            # glass only
+//! emission = [12, 12, 12]
+//! ```
+
+pub mod fresnel;
+
+use crate::math::{DVec3, Frame};
+use crate::sampling::warp;
+use std::f64::consts::FRAC_1_PI;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MaterialKind {
+    /// Lambertian reflection.
+    Diffuse,
+    /// Perfect specular reflection.
+    Mirror,
+    /// Smooth dielectric with exact Fresnel: reflection, refraction, total internal reflection.
+    /// `ior` is the inside index over the outside one (the outside is vacuum).
+    Glass { ior: f64 },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    pub kind: MaterialKind,
+    /// Reflectance (diffuse, mirror) or tint (glass), linear RGB in [0, 1].
+    pub color: DVec3,
+    /// Emitted radiance, linear RGB.
+    pub emission: DVec3,
+}
+
+/// A direction chosen by a material.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    pub wi: DVec3,
+    /// f cos / pdf: what the path throughput is multiplied by.
+    pub weight: DVec3,
+    /// Solid-angle pdf for non-delta lobes; the discrete lobe probability for delta ones.
+    pub pdf: f64,
+    /// A delta lobe (mirror, glass): light sampling cannot find it, so MIS does not apply.
+    pub delta: bool,
+}
+
+/// f cos and the pdf of sampling `wi`, for the non-delta materials.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfEval {
+    pub f_cos: DVec3,
+    pub pdf: f64,
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+
+    /// True when every lobe is a delta: next-event estimation is useless here.
+    pub fn is_delta(&self) -> bool {
+        !matches!(self.kind, MaterialKind::Diffuse)
+    }
+
+    /// Sample an incident direction for outgoing `wo` (unit, pointing away from the surface) at a
+    /// surface with geometric normal `n`. `u_lobe` picks between reflection and refraction.
+    #[inline]
+    pub fn sample(&self, wo: DVec3, n: DVec3, u_lobe: f64, u: (f64, f64)) -> Option<BsdfSample> {
+        let cos_o = wo.dot(n);
+        match self.kind {
+            MaterialKind::Diffuse => {
+                // Two-sided: reflect on the side the path arrived from.
+                let ns = if cos_o >= 0.0 { n } else { -n };
+                let local = warp::cosine_hemisphere(u);
+                if local.z <= 0.0 {
+                    return None;
+                }
+                let wi = Frame::from_normal(ns).to_world(local);
+                Some(BsdfSample {
+                    wi,
+                    weight: self.color,
+                    pdf: local.z * FRAC_1_PI,
+                    delta: false,
+                })
+            }
+            MaterialKind::Mirror => Some(BsdfSample {
+                wi: reflect(wo, n),
+                weight: self.color,
+                pdf: 1.0,
+                delta: true,
+            }),
+            MaterialKind::Glass { ior } => {
+                let entering = cos_o > 0.0;
+                let (eta, nf) = if entering { (ior, n) } else { (1.0 / ior, -n) };
+                let cos_i = cos_o.abs();
+                let f = fresnel::dielectric(cos_i, eta);
+                if u_lobe < f.reflectance {
+                    Some(BsdfSample {
+                        wi: reflect(wo, n),
+                        weight: self.color,
+                        pdf: f.reflectance,
+                        delta: true,
+                    })
+                } else {
+                    let wi = -wo / eta + nf * (cos_i / eta - f.cos_t);
+                    // Radiance is compressed by eta^2 entering a denser medium (pbrt's
+                    // TransportMode::Radiance); a path in and out again sees the factors cancel.
+                    Some(BsdfSample {
+                        wi: wi.normalize(),
+                        weight: self.color / (eta * eta),
+                        pdf: 1.0 - f.reflectance,
+                        delta: true,
+                    })
+                }
+            }
+        }
+    }
+
+    /// f cos and pdf for a pair of directions; zero for delta materials.
+    #[inline]
+    pub fn eval(&self, wo: DVec3, wi: DVec3, n: DVec3) -> BsdfEval {
+        match self.kind {
+            MaterialKind::Diffuse => {
+                let (co, ci) = (wo.dot(n), wi.dot(n));
+                if co * ci <= 0.0 {
+                    return BsdfEval {
+                        f_cos: DVec3::ZERO,
+                        pdf: 0.0,
+                    };
+                }
+                let cos = ci.abs();
+                BsdfEval {
+                    f_cos: self.color * (cos * FRAC_1_PI),
+                    pdf: cos * FRAC_1_PI,
+                }
+            }
+            _ => BsdfEval {
+                f_cos: DVec3::ZERO,
+                pdf: 0.0,
+            },
+        }
+    }
+}
+
+/// Mirror `wo` about the normal (either orientation of `n` gives the same result).
+#[inline]
+pub fn reflect(wo: DVec3, n: DVec3) -> DVec3 {
+    n * (2.0 * wo.dot(n)) - wo
+}

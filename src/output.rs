@@ -1,0 +1,177 @@
+//! Image output: tonemapped PNG and linear EXR, chosen by extension, written atomically (encode in
+//! memory, write a temporary file beside the target, fsync, rename), so an existing file is never
+//! left truncated and a failed save loses nothing.
+
+use crate::film::Film;
+use crate::settings::Tonemap;
+use image::{ImageFormat, Rgb32FImage, RgbImage};
+use std::io::{Cursor, Write};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("{}: unsupported image format (use .png or .exr)", .0.display())]
+    Format(PathBuf),
+    #[error("{}: cannot encode image: {source}", .path.display())]
+    Encode {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+    #[error("{}: cannot write: {source}", .path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// Map linear radiance to a display value in [0, 1] (before gamma).
+#[inline]
+pub fn tonemap(v: f32, exposure: f32, op: Tonemap) -> f32 {
+    let x = (v * exposure).max(0.0);
+    let y = match op {
+        Tonemap::Clamp => x,
+        Tonemap::Reinhard => x / (1.0 + x),
+        Tonemap::Aces => (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14),
+    };
+    if y.is_nan() {
+        0.0
+    } else {
+        y.clamp(0.0, 1.0)
+    }
+}
+
+/// smallpt's display encoding: gamma 1/2.2, rounded to 8 bits.
+#[inline]
+pub fn encode_8bit(y: f32) -> u8 {
+    (y.powf(1.0 / 2.2) * 255.0 + 0.5) as u8
+}
+
+/// A 256-entry-per-channel lookup is not exact for HDR input, so the full path is kept; this is
+/// what both the PNG writer and the TUI preview call, so they agree to the bit.
+#[inline]
+pub fn display_rgb(rgb: [f32; 3], exposure: f32, op: Tonemap) -> [u8; 3] {
+    rgb.map(|c| encode_8bit(tonemap(c, exposure, op)))
+}
+
+/// The tonemapped 8-bit image of linear f32 RGB data (row 0 at the top).
+pub fn to_rgb8(width: u32, height: u32, linear: &[f32], exposure: f64, op: Tonemap) -> RgbImage {
+    let exposure = exposure as f32;
+    let mut img = RgbImage::new(width, height);
+    for (px, c) in img.pixels_mut().zip(linear.chunks_exact(3)) {
+        px.0 = display_rgb([c[0], c[1], c[2]], exposure, op);
+    }
+    img
+}
+
+/// Encode linear f32 RGB to the format the path's extension names.
+pub fn encode(
+    path: &Path,
+    width: u32,
+    height: u32,
+    linear: &[f32],
+    exposure: f64,
+    op: Tonemap,
+) -> Result<Vec<u8>, OutputError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    let mut bytes = Cursor::new(Vec::new());
+    let result = match ext.as_deref() {
+        Some("png") => {
+            to_rgb8(width, height, linear, exposure, op).write_to(&mut bytes, ImageFormat::Png)
+        }
+        Some("exr") => {
+            let img = Rgb32FImage::from_raw(width, height, linear.to_vec())
+                .ok_or_else(|| OutputError::Format(path.to_path_buf()))?;
+            img.write_to(&mut bytes, ImageFormat::OpenExr)
+        }
+        _ => return Err(OutputError::Format(path.to_path_buf())),
+    };
+    result.map_err(|source| OutputError::Encode {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(bytes.into_inner())
+}
+
+/// Write the film's mean image to `path` (.png or .exr), atomically.
+pub fn save_film(path: &Path, film: &Film, exposure: f64, op: Tonemap) -> Result<(), OutputError> {
+    let data = encode(
+        path,
+        film.width,
+        film.height,
+        &film.mean_rgb_f32(),
+        exposure,
+        op,
+    )?;
+    write_atomic(path, &data)
+}
+
+/// Write bytes to `path` through a temporary file in the same directory and a rename.
+pub fn write_atomic(path: &Path, data: &[u8]) -> Result<(), OutputError> {
+    let io = |source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().ok_or_else(|| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a file name",
+        ))
+    })?;
+    let tmp = dir.join(format!(
+        ".{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        write_all_to(&mut f, data)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(io)
+}
+
+/// Write everything or fail; separate so a failing writer (full disk) can be tested.
+pub fn write_all_to(w: &mut impl Write, data: &[u8]) -> std::io::Result<()> {
+    w.write_all(data)?;
+    w.flush()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tonemap_matches_smallpt() {
+        // smallpt: int(pow(clamp(x), 1/2.2) * 255 + .5)
+        for x in [0.0f32, 0.001, 0.18, 0.5, 0.999, 1.0, 3.0] {
+            let want = ((x.clamp(0.0, 1.0) as f64).powf(1.0 / 2.2) * 255.0 + 0.5) as u8;
+            assert_eq!(encode_8bit(tonemap(x, 1.0, Tonemap::Clamp)), want, "x={x}");
+        }
+        assert_eq!(encode_8bit(tonemap(f32::NAN, 1.0, Tonemap::Aces)), 0);
+    }
+
+    #[test]
+    fn existing_file_survives_a_failed_write() {
+        let dir = std::env::temp_dir().join(format!("ptui-out-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("keep.png");
+        std::fs::write(&path, b"old").unwrap();
+        // A path whose temp file cannot be created: the target stays as it was.
+        let bad = dir.join("missing-dir").join("x.png");
+        assert!(write_atomic(&bad, b"new").is_err());
+        write_atomic(&path, b"new").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"new");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,194 @@
+//! The progressive driver: whole-image passes of one sample per pixel, parallel over bands of
+//! rows on a rayon pool, with a cancel flag checked every row.
+//!
+//! Random numbers derive from (seed, pixel, pass), so the image is the same bit for bit whatever
+//! the thread count. A cancelled pass still counts as started: resuming goes on with the next pass
+//! index, so no pixel ever reuses a random stream.
+
+use crate::film::Film;
+use crate::integrator::{self, depth_limit};
+use crate::math::DVec3;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use crate::settings::RenderSettings;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PassOutcome {
+    Complete,
+    Cancelled,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("invalid settings: {0}")]
+    Settings(String),
+    #[error("cannot start render threads: {0}")]
+    Pool(#[from] rayon::ThreadPoolBuildError),
+}
+
+/// Counters the summary and the TUI show.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RenderStats {
+    /// Passes started (complete or cancelled).
+    pub passes: u32,
+    /// Passes that covered every pixel.
+    pub complete_passes: u32,
+    /// Camera samples computed (valid or not).
+    pub samples: u64,
+    /// NaN or infinite samples dropped before reaching the film.
+    pub invalid: u64,
+    /// Wall time spent in passes.
+    pub elapsed: Duration,
+}
+
+impl RenderStats {
+    pub fn samples_per_second(&self) -> f64 {
+        let s = self.elapsed.as_secs_f64();
+        if s > 0.0 {
+            self.samples as f64 / s
+        } else {
+            0.0
+        }
+    }
+}
+
+pub struct Renderer {
+    pub scene: Arc<Scene>,
+    pub settings: RenderSettings,
+    film: Film,
+    pool: Arc<rayon::ThreadPool>,
+    stats: RenderStats,
+}
+
+/// A rayon pool with `threads` workers (0 = one per core).
+pub fn build_pool(threads: usize) -> Result<Arc<rayon::ThreadPool>, RenderError> {
+    Ok(Arc::new(
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("ptui-render-{i}"))
+            .build()?,
+    ))
+}
+
+impl Renderer {
+    pub fn new(scene: Arc<Scene>, settings: RenderSettings) -> Result<Self, RenderError> {
+        let pool = build_pool(settings.threads)?;
+        Self::with_pool(scene, settings, pool)
+    }
+
+    /// Use an existing pool (the TUI keeps one of lower priority across restarts).
+    pub fn with_pool(
+        scene: Arc<Scene>,
+        settings: RenderSettings,
+        pool: Arc<rayon::ThreadPool>,
+    ) -> Result<Self, RenderError> {
+        settings.validate().map_err(RenderError::Settings)?;
+        Ok(Renderer {
+            film: Film::new(settings.width, settings.height),
+            scene,
+            settings,
+            pool,
+            stats: RenderStats::default(),
+        })
+    }
+
+    pub fn film(&self) -> &Film {
+        &self.film
+    }
+
+    pub fn stats(&self) -> RenderStats {
+        self.stats
+    }
+
+    pub fn threads(&self) -> usize {
+        self.pool.current_num_threads()
+    }
+
+    /// Whether the target sample count has been reached.
+    pub fn done(&self) -> bool {
+        self.stats.complete_passes >= self.settings.spp
+    }
+
+    /// Add one sample to every pixel, unless cancelled on the way.
+    pub fn run_pass(&mut self, cancel: &AtomicBool) -> PassOutcome {
+        let started = Instant::now();
+        let pass = self.stats.passes;
+        self.stats.passes += 1;
+        let scene = &*self.scene;
+        let settings = &self.settings;
+        let threads = self.pool.current_num_threads() as u32;
+        // Enough bands that both cores stay busy to the end of the pass, few enough that the
+        // per-task overhead is nothing next to a row of paths.
+        let band_rows = (settings.height / (threads * 16)).clamp(1, 8);
+        let invalid = AtomicU64::new(0);
+        let samples = AtomicU64::new(0);
+        let film = &mut self.film;
+        self.pool.install(|| {
+            film.par_bands(band_rows).for_each(|mut band| {
+                let (mut bad, mut done) = (0u64, 0u64);
+                for row in 0..band.rows() {
+                    if cancel.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let y = band.first_row + row;
+                    for x in 0..settings.width {
+                        let v = sample_pixel(scene, settings, x, y, pass);
+                        done += 1;
+                        if v.is_finite() {
+                            band.add(x, row, v);
+                        } else {
+                            bad += 1;
+                        }
+                    }
+                }
+                invalid.fetch_add(bad, Ordering::Relaxed);
+                samples.fetch_add(done, Ordering::Relaxed);
+            })
+        });
+        let done = samples.into_inner();
+        self.stats.samples += done;
+        self.stats.invalid += invalid.into_inner();
+        self.stats.elapsed += started.elapsed();
+        if done == settings.pixels() as u64 {
+            self.stats.complete_passes += 1;
+            PassOutcome::Complete
+        } else {
+            PassOutcome::Cancelled
+        }
+    }
+
+    /// Render until the target spp, `cancel`, or `on_pass` returning false.
+    pub fn render(&mut self, cancel: &AtomicBool, mut on_pass: impl FnMut(&Renderer) -> bool) {
+        while !self.done() {
+            if self.run_pass(cancel) == PassOutcome::Cancelled || !on_pass(self) {
+                break;
+            }
+        }
+    }
+}
+
+/// One camera sample of pixel (x, y) in pass `pass`: a jittered ray through the pixel's square
+/// footprint (box filter) and its radiance.
+#[inline]
+pub fn sample_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, pass: u32) -> DVec3 {
+    let pixel = y as u64 * settings.width as u64 + x as u64;
+    let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, pass as u64);
+    let (jx, jy) = sampler.get_2d();
+    let ray = scene.camera.ray(
+        settings.width,
+        settings.height,
+        x as f64 + jx,
+        y as f64 + jy,
+    );
+    integrator::radiance(
+        settings.integrator,
+        scene,
+        ray,
+        &mut sampler,
+        depth_limit(settings),
+    )
+}

@@ -1,0 +1,292 @@
+//! The scene file format: serde structs with defaults, unknown keys rejected, and values checked
+//! as they are read so each error carries the span (hence line) of the offending value.
+//!
+//! ```toml
+//! [camera]                 # see `camera`
+//! [render]                 # see `settings`
+//! background = [0, 0, 0]
+//!
+//! [[sphere]]
+//! name = "left"            # optional, unique
+//! center = [100001, 40.8, 81.6]
+//! radius = 1e5
+//! color = [0.75, 0.25, 0.25]
+//! ```
+
+use crate::settings::{SettingsOverrides, MAX_DIMENSION};
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::Deserialize;
+use std::fmt;
+use toml::Spanned;
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDesc {
+    #[serde(default)]
+    pub camera: CameraDesc,
+    #[serde(default)]
+    pub render: SettingsOverrides,
+    pub background: Option<Rgb>,
+    #[serde(default)]
+    pub sphere: Vec<SphereDesc>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub position: Option<V3>,
+    pub direction: Option<Spanned<Dir>>,
+    pub look_at: Option<Spanned<V3>>,
+    pub up: Option<Spanned<Dir>>,
+    pub vfov: Option<Fov>,
+    pub near: Option<NonNegative>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MaterialName {
+    #[default]
+    Diffuse,
+    Mirror,
+    Glass,
+}
+
+/// The material fields every object carries (flattening is not possible with unknown-key
+/// rejection in serde, so each object type lists them).
+#[derive(Debug, Default, Clone)]
+pub struct MaterialDesc {
+    pub material: Option<MaterialName>,
+    pub color: Option<Albedo>,
+    pub emission: Option<Rgb>,
+    pub ior: Option<Spanned<Positive>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereDesc {
+    pub name: Option<Spanned<String>>,
+    pub center: V3,
+    pub radius: Positive,
+    pub material: Option<MaterialName>,
+    pub color: Option<Albedo>,
+    pub emission: Option<Rgb>,
+    pub ior: Option<Spanned<Positive>>,
+}
+
+impl SphereDesc {
+    pub fn material(&self) -> MaterialDesc {
+        MaterialDesc {
+            material: self.material,
+            color: self.color,
+            emission: self.emission,
+            ior: self.ior.clone(),
+        }
+    }
+}
+
+/// A finite 3-vector.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct V3(pub [f64; 3]);
+
+/// A finite, non-zero direction (not normalised).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Dir(pub [f64; 3]);
+
+/// Non-negative linear RGB: a number (grey) or [r, g, b].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rgb(pub [f64; 3]);
+
+/// A reflectance: like [`Rgb`] but each component in [0, 1] (more would create energy).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Albedo(pub [f64; 3]);
+
+/// A finite number > 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Positive(pub f64);
+
+/// A finite number >= 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NonNegative(pub f64);
+
+/// A vertical field of view in degrees, strictly between 0 and 180.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fov(pub f64);
+
+fn finite(v: f64) -> Result<f64, String> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number, got {v}"))
+    }
+}
+
+/// Reads a number or an array of three numbers.
+struct TripleVisitor {
+    allow_scalar: bool,
+}
+
+impl<'de> Visitor<'de> for TripleVisitor {
+    type Value = [f64; 3];
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        if self.allow_scalar {
+            f.write_str("a number or an array of 3 numbers")
+        } else {
+            f.write_str("an array of 3 numbers")
+        }
+    }
+
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<[f64; 3], E> {
+        if self.allow_scalar {
+            Ok([v; 3])
+        } else {
+            Err(E::invalid_type(de::Unexpected::Float(v), &self))
+        }
+    }
+
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<[f64; 3], E> {
+        if self.allow_scalar {
+            Ok([v as f64; 3])
+        } else {
+            Err(E::invalid_type(de::Unexpected::Signed(v), &self))
+        }
+    }
+
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<[f64; 3], E> {
+        self.visit_i64(v.min(i64::MAX as u64) as i64)
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[f64; 3], A::Error> {
+        let mut out = [0.0; 3];
+        for (i, slot) in out.iter_mut().enumerate() {
+            *slot = seq
+                .next_element::<f64>()?
+                .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+        }
+        if seq.next_element::<de::IgnoredAny>()?.is_some() {
+            return Err(de::Error::invalid_length(4, &self));
+        }
+        Ok(out)
+    }
+}
+
+fn triple<'de, D: Deserializer<'de>>(d: D, allow_scalar: bool) -> Result<[f64; 3], D::Error> {
+    d.deserialize_any(TripleVisitor { allow_scalar })
+}
+
+fn check3<E: de::Error>(
+    v: [f64; 3],
+    check: impl Fn(f64) -> Result<f64, String>,
+) -> Result<[f64; 3], E> {
+    for x in v {
+        check(x).map_err(E::custom)?;
+    }
+    Ok(v)
+}
+
+impl<'de> Deserialize<'de> for V3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        check3(triple(d, false)?, finite).map(V3)
+    }
+}
+
+impl<'de> Deserialize<'de> for Dir {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = check3(triple(d, false)?, finite)?;
+        if v.iter().all(|x| *x == 0.0) {
+            return Err(de::Error::custom("direction must not be the zero vector"));
+        }
+        Ok(Dir(v))
+    }
+}
+
+impl<'de> Deserialize<'de> for Rgb {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        check3(triple(d, true)?, |x| {
+            let x = finite(x)?;
+            if x < 0.0 {
+                Err(format!("colour components must be >= 0, got {x}"))
+            } else {
+                Ok(x)
+            }
+        })
+        .map(Rgb)
+    }
+}
+
+impl<'de> Deserialize<'de> for Albedo {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        check3(triple(d, true)?, |x| {
+            let x = finite(x)?;
+            if !(0.0..=1.0).contains(&x) {
+                Err(format!(
+                    "reflectance components must be in [0, 1] (more creates energy), got {x}"
+                ))
+            } else {
+                Ok(x)
+            }
+        })
+        .map(Albedo)
+    }
+}
+
+impl<'de> Deserialize<'de> for Positive {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = finite(f64::deserialize(d)?).map_err(de::Error::custom)?;
+        if v > 0.0 {
+            Ok(Positive(v))
+        } else {
+            Err(de::Error::custom(format!("must be > 0, got {v}")))
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for NonNegative {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = finite(f64::deserialize(d)?).map_err(de::Error::custom)?;
+        if v >= 0.0 {
+            Ok(NonNegative(v))
+        } else {
+            Err(de::Error::custom(format!("must be >= 0, got {v}")))
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Fov {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = finite(f64::deserialize(d)?).map_err(de::Error::custom)?;
+        if v > 0.0 && v < 180.0 {
+            Ok(Fov(v))
+        } else {
+            Err(de::Error::custom(format!(
+                "field of view must be between 0 and 180 degrees (exclusive), got {v}"
+            )))
+        }
+    }
+}
+
+/// `width`/`height`: 1..=MAX_DIMENSION.
+pub fn de_dimension<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
+    let v = i64::deserialize(d)?;
+    if v >= 1 && v <= MAX_DIMENSION as i64 {
+        Ok(Some(v as u32))
+    } else {
+        Err(de::Error::custom(format!(
+            "must be between 1 and {MAX_DIMENSION}, got {v}"
+        )))
+    }
+}
+
+/// Counts such as `spp`: at least 1.
+pub fn de_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
+    let v = i64::deserialize(d)?;
+    if v >= 1 && v <= u32::MAX as i64 {
+        Ok(Some(v as u32))
+    } else {
+        Err(de::Error::custom(format!("must be at least 1, got {v}")))
+    }
+}
+
+pub fn de_positive_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    Positive::deserialize(d).map(|p| Some(p.0))
+}

@@ -1,0 +1,111 @@
+//! The validated, immutable scene: primitives, materials, lights, camera, and the machinery
+//! (accelerator, light sampling) chosen for this scene.
+
+pub mod builtin;
+pub mod description;
+pub mod error;
+pub mod load;
+
+use crate::accel::Accel;
+use crate::camera::Camera;
+use crate::geometry::{Aabb, Hit, Sphere};
+use crate::light::Lights;
+use crate::material::Material;
+use crate::math::{DVec3, Ray};
+use crate::settings::SettingsOverrides;
+use std::time::Duration;
+
+pub use error::SceneError;
+pub use load::{load, load_str};
+
+/// A geometric shape; a closed set dispatched by `match`.
+#[derive(Clone, Copy, Debug)]
+pub enum Shape {
+    Sphere(Sphere),
+}
+
+impl Shape {
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<f64> {
+        match self {
+            Shape::Sphere(s) => s.intersect(ray, t_max),
+        }
+    }
+
+    #[inline]
+    pub fn hit(&self, ray: &Ray, t: f64, prim: u32) -> Hit {
+        match self {
+            Shape::Sphere(s) => s.hit(ray, t, prim),
+        }
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            Shape::Sphere(s) => s.bounds(),
+        }
+    }
+}
+
+/// A shape with its material and, if it emits, its index in [`Lights`].
+#[derive(Clone, Copy, Debug)]
+pub struct Primitive {
+    pub shape: Shape,
+    pub material: u32,
+    pub light: Option<u32>,
+}
+
+/// What the scene build chose, reported to the user.
+#[derive(Clone, Debug)]
+pub struct BuildReport {
+    pub accel: String,
+    pub light_sampling: String,
+    pub build_time: Duration,
+}
+
+impl std::fmt::Display for BuildReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "accel: {}; light sampling: {}",
+            self.accel, self.light_sampling
+        )
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Built-in name or file path, for messages and output file names.
+    pub name: String,
+    pub camera: Camera,
+    pub prims: Vec<Primitive>,
+    pub materials: Vec<Material>,
+    pub lights: Lights,
+    pub accel: Accel,
+    pub background: DVec3,
+    /// The scene file's `[render]` table: what it changes from the defaults.
+    pub render: SettingsOverrides,
+    pub report: BuildReport,
+}
+
+impl Scene {
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
+        self.accel.intersect(&self.prims, ray, t_max)
+    }
+
+    #[inline]
+    pub fn material(&self, hit: &Hit) -> &Material {
+        &self.materials[self.prims[hit.prim as usize].material as usize]
+    }
+
+    /// Whether next-event estimation has anything to aim at.
+    pub fn has_lights(&self) -> bool {
+        !self.lights.is_empty()
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.prims
+            .iter()
+            .fold(Aabb::EMPTY, |b, p| b.union(p.shape.bounds()))
+    }
+}

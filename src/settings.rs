@@ -1,0 +1,240 @@
+//! Render settings: typed, defaulted in exactly one place ([`RenderSettings::default`]), and merged
+//! in one explicit step: scene file `[render]` table, then CLI flags, then the TUI form.
+//!
+//! ```toml
+//! [render]
+//! width = 320
+//! height = 240
+//! spp = 256
+//! integrator = "path"     # path | naive
+//! max_depth = 12          # default: unlimited (Russian roulette ends paths)
+//! seed = 0
+//! exposure = 1.0
+//! tonemap = "clamp"       # clamp | reinhard | aces
+//! ```
+
+use crate::sampling::SamplerKind;
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum IntegratorKind {
+    /// Unbiased path tracing: next-event estimation and BSDF sampling combined by MIS.
+    #[default]
+    Path,
+    /// BSDF sampling only, emission gathered when a path hits it (smallpt's estimator).
+    Naive,
+}
+
+impl IntegratorKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Path => "path",
+            IntegratorKind::Naive => "naive",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Tonemap {
+    /// smallpt's: scale by exposure, clamp to [0, 1].
+    #[default]
+    Clamp,
+    /// x / (1 + x): keeps highlights from clipping.
+    Reinhard,
+    /// Narkowicz's fit of the ACES filmic curve.
+    Aces,
+}
+
+impl Tonemap {
+    pub fn name(self) -> &'static str {
+        match self {
+            Tonemap::Clamp => "clamp",
+            Tonemap::Reinhard => "reinhard",
+            Tonemap::Aces => "aces",
+        }
+    }
+}
+
+/// Everything that decides the image (plus how many threads compute it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Target samples per pixel.
+    pub spp: u32,
+    pub seed: u64,
+    pub integrator: IntegratorKind,
+    pub sampler: SamplerKind,
+    /// Longest path in bounces; `None` leaves it to Russian roulette.
+    pub max_depth: Option<u32>,
+    pub exposure: f64,
+    pub tonemap: Tonemap,
+    /// Worker threads; 0 means one per core.
+    pub threads: usize,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 320,
+            height: 240,
+            spp: 256,
+            seed: 0,
+            integrator: IntegratorKind::Path,
+            sampler: SamplerKind::Independent,
+            max_depth: None,
+            exposure: 1.0,
+            tonemap: Tonemap::Clamp,
+            threads: 0,
+        }
+    }
+}
+
+/// Largest width or height accepted; the film's memory is checked separately.
+pub const MAX_DIMENSION: u32 = 1 << 15;
+
+/// Bytes of render state per pixel (film sums, counts, snapshot); see `film`.
+pub const BYTES_PER_PIXEL: u64 = 64;
+
+/// A partial set of settings: one layer of the merge (scene file, CLI or TUI form).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingsOverrides {
+    #[serde(default, deserialize_with = "crate::scene::description::de_dimension")]
+    pub width: Option<u32>,
+    #[serde(default, deserialize_with = "crate::scene::description::de_dimension")]
+    pub height: Option<u32>,
+    #[serde(default, deserialize_with = "crate::scene::description::de_count")]
+    pub spp: Option<u32>,
+    pub seed: Option<u64>,
+    pub integrator: Option<IntegratorKind>,
+    pub sampler: Option<SamplerKind>,
+    pub max_depth: Option<u32>,
+    #[serde(
+        default,
+        deserialize_with = "crate::scene::description::de_positive_opt"
+    )]
+    pub exposure: Option<f64>,
+    pub tonemap: Option<Tonemap>,
+    pub threads: Option<usize>,
+}
+
+impl RenderSettings {
+    /// Apply one layer of overrides on top of these settings.
+    pub fn apply(&mut self, o: &SettingsOverrides) {
+        macro_rules! take {
+            ($($f:ident),*) => { $( if let Some(v) = o.$f { self.$f = v; } )* };
+        }
+        take!(width, height, spp, seed, integrator, sampler, exposure, tonemap, threads);
+        if let Some(d) = o.max_depth {
+            self.max_depth = Some(d);
+        }
+    }
+
+    /// Defaults, then each layer in order.
+    pub fn merged(layers: &[&SettingsOverrides]) -> Self {
+        let mut s = RenderSettings::default();
+        for layer in layers {
+            s.apply(layer);
+        }
+        s
+    }
+
+    /// Check ranges that any layer (CLI, TUI) could have broken, naming the field.
+    pub fn validate(&self) -> Result<(), String> {
+        for (name, v) in [("width", self.width), ("height", self.height)] {
+            if v == 0 || v > MAX_DIMENSION {
+                return Err(format!(
+                    "{name} must be between 1 and {MAX_DIMENSION}, got {v}"
+                ));
+            }
+        }
+        if self.spp == 0 {
+            return Err("spp must be at least 1".into());
+        }
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            return Err(format!(
+                "exposure must be a finite number > 0, got {}",
+                self.exposure
+            ));
+        }
+        let need = self.width as u64 * self.height as u64 * BYTES_PER_PIXEL;
+        if let Some(avail) = available_memory() {
+            if need > avail {
+                return Err(format!(
+                    "a {}x{} film needs {} of memory but only {} is available",
+                    self.width,
+                    self.height,
+                    human_bytes(need),
+                    human_bytes(avail)
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    pub fn pixels(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+}
+
+/// MemAvailable from /proc/meminfo, where there is one.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+pub fn human_bytes(b: u64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = b as f64;
+    let mut unit = 0;
+    while v >= 1024.0 && unit + 1 < UNITS.len() {
+        v /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{b} B")
+    } else {
+        format!("{v:.1} {}", UNITS[unit])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layers_apply_in_order() {
+        let scene = SettingsOverrides {
+            width: Some(100),
+            spp: Some(8),
+            ..Default::default()
+        };
+        let cli = SettingsOverrides {
+            spp: Some(16),
+            max_depth: Some(5),
+            ..Default::default()
+        };
+        let s = RenderSettings::merged(&[&scene, &cli]);
+        assert_eq!(
+            (s.width, s.height, s.spp, s.max_depth),
+            (100, 240, 16, Some(5))
+        );
+    }
+
+    #[test]
+    fn huge_film_reports_the_memory_it_needs() {
+        let s = RenderSettings {
+            width: MAX_DIMENSION,
+            height: MAX_DIMENSION,
+            ..Default::default()
+        };
+        // 32768^2 * 64 B = 64 GiB: more than these machines have.
+        let err = s.validate().unwrap_err();
+        assert!(err.contains("64.0 GiB"), "{err}");
+    }
+}
