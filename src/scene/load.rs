@@ -102,7 +102,7 @@ fn build(desc: &SceneDesc, src: &str, file: &str) -> Result<Scene, SceneError> {
         materials.push(material);
     }
 
-    let accel = Accel::Flat;
+    let accel = Accel::Flat(crate::accel::lanes::SphereLanes::new(&prims));
     let lights = Lights::new(lights);
     let light_sampling = match lights.len() {
         0 => "off (no emitters)".to_string(),
