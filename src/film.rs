@@ -1,8 +1,17 @@
-//! The film: per-pixel running mean and sum of squared deviations (Welford) of linear radiance in
-//! f64, with a per-pixel sample count, so each pixel's standard error is known at any time.
+//! The film: per-pixel running mean (f64) and sum of squared deviations (Welford) of linear
+//! radiance, a per-pixel sample count, and the running mean of the odd passes alone.
 //!
-//! Memory: 24 (mean) + 24 (M2) + 4 (count) = 52 bytes per pixel, stored as separate arrays so
-//! nothing is padded; a snapshot adds 12 (f32 RGB), within the 64-byte budget.
+//! Two error estimates come from it:
+//! - per pixel, the sample variance over n (Welford's M2): exact for independent samples, and
+//!   an upper bound for stratified (Sobol) ones, whose error falls faster than 1/sqrt(n);
+//! - for the whole image, the two interleaved half-buffers: even and odd passes are independent
+//!   estimates (the Sobol sampler scrambles them independently), so
+//!   E[(mean_even - mean_odd)^2] / 4 is the variance of the full mean whatever the sampler.
+//!   Summed over all pixels and channels this is an unbiased estimate of the MSE.
+//!
+//! Memory: mean 24 + M2 12 (f32: the variance needs a few digits, not sixteen) + count 4 +
+//! odd-pass mean 12 (f32) + odd count 4 = 56 bytes per pixel, stored as separate arrays so
+//! nothing is padded.
 
 use crate::math::DVec3;
 use rayon::prelude::*;
@@ -12,8 +21,10 @@ pub struct Film {
     pub width: u32,
     pub height: u32,
     mean: Vec<[f64; 3]>,
-    m2: Vec<[f64; 3]>,
+    m2: Vec<[f32; 3]>,
     count: Vec<u32>,
+    odd_mean: Vec<[f32; 3]>,
+    odd_count: Vec<u32>,
 }
 
 /// Whole-image error estimate from the per-pixel standard errors (DESIGN.md's metrics).
@@ -38,15 +49,17 @@ pub struct FilmRows<'a> {
     pub first_row: u32,
     pub width: u32,
     mean: &'a mut [[f64; 3]],
-    m2: &'a mut [[f64; 3]],
+    m2: &'a mut [[f32; 3]],
     count: &'a mut [u32],
+    odd_mean: &'a mut [[f32; 3]],
+    odd_count: &'a mut [u32],
 }
 
 impl FilmRows<'_> {
-    /// Add one sample to pixel (x, first_row + row). Welford's update: numerically stable
-    /// however many samples, unlike a running sum of squares.
+    /// Add one sample of pass `pass` to pixel (x, first_row + row). Welford's update:
+    /// numerically stable however many samples, unlike a running sum of squares.
     #[inline]
-    pub fn add(&mut self, x: u32, row: u32, v: DVec3) {
+    pub fn add(&mut self, x: u32, row: u32, pass: u32, v: DVec3) {
         let i = (row * self.width + x) as usize;
         self.count[i] += 1;
         let n = self.count[i] as f64;
@@ -55,7 +68,15 @@ impl FilmRows<'_> {
         for c in 0..3 {
             let delta = v[c] - mean[c];
             mean[c] += delta / n;
-            m2[c] += delta * (v[c] - mean[c]);
+            m2[c] += (delta * (v[c] - mean[c])) as f32;
+        }
+        if pass % 2 == 1 {
+            self.odd_count[i] += 1;
+            let n = self.odd_count[i] as f64;
+            let odd = &mut self.odd_mean[i];
+            for c in 0..3 {
+                odd[c] += ((v[c] - odd[c] as f64) / n) as f32;
+            }
         }
     }
 
@@ -73,6 +94,8 @@ impl Film {
             mean: vec![[0.0; 3]; n],
             m2: vec![[0.0; 3]; n],
             count: vec![0; n],
+            odd_mean: vec![[0.0; 3]; n],
+            odd_count: vec![0; n],
         }
     }
 
@@ -89,14 +112,20 @@ impl Film {
             .par_chunks_mut(chunk)
             .zip(self.m2.par_chunks_mut(chunk))
             .zip(self.count.par_chunks_mut(chunk))
+            .zip(self.odd_mean.par_chunks_mut(chunk))
+            .zip(self.odd_count.par_chunks_mut(chunk))
             .enumerate()
-            .map(move |(band, ((mean, m2), count))| FilmRows {
-                first_row: band as u32 * rows,
-                width,
-                mean,
-                m2,
-                count,
-            })
+            .map(
+                move |(band, ((((mean, m2), count), odd_mean), odd_count))| FilmRows {
+                    first_row: band as u32 * rows,
+                    width,
+                    mean,
+                    m2,
+                    count,
+                    odd_mean,
+                    odd_count,
+                },
+            )
     }
 
     #[inline]
@@ -116,7 +145,24 @@ impl Film {
         if n < 2.0 {
             return DVec3::splat(f64::INFINITY);
         }
-        DVec3::from_array(self.m2[i]) / ((n - 1.0) * n)
+        DVec3::from_array(self.m2[i].map(f64::from)) / ((n - 1.0) * n)
+    }
+
+    /// Variance of pixel i's mean from its two half-buffers (one degree of freedom: noisy per
+    /// pixel, unbiased in sum). Infinite until both halves have a sample.
+    #[inline]
+    pub fn half_buffer_variance(&self, i: usize) -> DVec3 {
+        let (n, n_odd) = (self.count[i] as f64, self.odd_count[i] as f64);
+        let n_even = n - n_odd;
+        if n_odd < 1.0 || n_even < 1.0 {
+            return DVec3::splat(f64::INFINITY);
+        }
+        let mean = self.mean(i);
+        let odd = DVec3::from_array(self.odd_mean[i].map(f64::from));
+        let even = (mean * n - odd * n_odd) / n_even;
+        let d = even - odd;
+        // Var(m_even - m_odd) = s^2 (1/n_even + 1/n_odd) and Var(mean) = s^2 / n.
+        d * d * (n_even * n_odd / (n * n))
     }
 
     /// Smallest and largest per-pixel sample counts.
@@ -126,11 +172,18 @@ impl Film {
         (lo, hi)
     }
 
-    pub fn error_estimate(&self) -> ErrorEstimate {
+    /// Whole-image error estimate. `stratified` selects the half-buffer estimator (needed when
+    /// samples within a pixel are not independent, as with the Sobol sampler); otherwise the
+    /// per-sample variance, which has many more degrees of freedom.
+    pub fn error_estimate(&self, stratified: bool) -> ErrorEstimate {
         let (se, rel) = (0..self.pixels())
             .into_par_iter()
             .map(|i| {
-                let v = self.variance_of_mean(i);
+                let v = if stratified {
+                    self.half_buffer_variance(i)
+                } else {
+                    self.variance_of_mean(i)
+                };
                 if !v.is_finite() {
                     return (f64::INFINITY, f64::INFINITY);
                 }
@@ -176,11 +229,23 @@ mod tests {
         let xs = [1e6 + 1.0, 1e6 + 2.0, 1e6 + 3.0, 1e6 + 4.0];
         for x in xs {
             film.par_bands(1)
-                .for_each(|mut band| band.add(0, 0, DVec3::splat(x)));
+                .for_each(|mut band| band.add(0, 0, 0, DVec3::splat(x)));
         }
         let mean = xs.iter().sum::<f64>() / 4.0;
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 3.0;
         assert_eq!(film.mean(0).x, mean);
-        assert!((film.variance_of_mean(0).x - var / 4.0).abs() < 1e-9);
+        assert!((film.variance_of_mean(0).x - var / 4.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn half_buffers_split_even_and_odd_passes() {
+        let mut film = Film::new(1, 1);
+        for (pass, x) in [1.0, 3.0, 2.0, 6.0].into_iter().enumerate() {
+            film.par_bands(1)
+                .for_each(|mut band| band.add(0, 0, pass as u32, DVec3::splat(x)));
+        }
+        // even passes: 1, 2 (mean 1.5); odd: 3, 6 (mean 4.5); (1.5 - 4.5)^2 * 2 * 2 / 16.
+        assert!((film.half_buffer_variance(0).x - 9.0 / 4.0).abs() < 1e-6);
+        assert_eq!(film.mean(0).x, 3.0);
     }
 }

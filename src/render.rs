@@ -108,6 +108,12 @@ impl Renderer {
         self.pool.current_num_threads()
     }
 
+    /// The error estimate suited to the sampler in use.
+    pub fn error_estimate(&self) -> crate::film::ErrorEstimate {
+        self.film
+            .error_estimate(self.settings.sampler.is_stratified())
+    }
+
     /// Whether the target sample count has been reached.
     pub fn done(&self) -> bool {
         self.stats.complete_passes >= self.settings.spp
@@ -139,7 +145,7 @@ impl Renderer {
                         let v = sample_pixel(scene, settings, x, y, pass);
                         done += 1;
                         if v.is_finite() {
-                            band.add(x, row, v);
+                            band.add(x, row, pass, v);
                         } else {
                             bad += 1;
                         }

@@ -83,7 +83,7 @@ impl Default for RenderSettings {
             spp: 256,
             seed: 0,
             integrator: IntegratorKind::Path,
-            sampler: SamplerKind::Independent,
+            sampler: SamplerKind::Sobol,
             max_depth: None,
             exposure: 1.0,
             tonemap: Tonemap::Clamp,

@@ -2,6 +2,7 @@
 
 pub mod render;
 
+use crate::sampling::SamplerKind;
 use crate::settings::{IntegratorKind, SettingsOverrides, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -57,6 +58,9 @@ pub struct SettingsArgs {
     pub seed: Option<u64>,
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorKind>,
+    /// Sample sequence: Owen-scrambled Sobol or independent random numbers.
+    #[arg(long, value_enum)]
+    pub sampler: Option<SamplerKind>,
     /// Longest path in bounces (default: unlimited, Russian roulette ends paths).
     #[arg(long)]
     pub max_depth: Option<u32>,
@@ -78,6 +82,7 @@ impl SettingsArgs {
             spp: self.spp,
             seed: self.seed,
             integrator: self.integrator,
+            sampler: self.sampler,
             max_depth: self.max_depth,
             threads: self.threads.map(|t| t as usize),
             exposure: self.exposure,

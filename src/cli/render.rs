@@ -53,7 +53,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
 pub fn summary(r: &Renderer) -> String {
     let s = &r.settings;
     let st = r.stats();
-    let err = r.film().error_estimate();
+    let err = r.error_estimate();
     format!(
         "{name}: {w}x{h}, {spp} spp, {integ} integrator, seed {seed}, {threads} threads\n\
          time {time:.2} s (scene build {build:.1} ms), {rate:.2} M samples/s, invalid samples {invalid}\n\

@@ -3,6 +3,7 @@
 
 pub mod rng;
 pub mod sampler;
+pub mod sobol;
 pub mod warp;
 
 pub use rng::Rng;

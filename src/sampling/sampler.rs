@@ -1,36 +1,85 @@
 //! The per-sample source of uniform numbers handed to the integrators.
 
 use super::rng::Rng;
+use super::sobol::PaddedSobol;
 
-/// Which sequence feeds the integrator. Only the independent sampler exists today; the enum is
-/// the seam where low-discrepancy samplers plug in without touching the integrators.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+/// Which sequence feeds the integrator.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Deserialize,
+    serde::Serialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum SamplerKind {
+    /// Owen-scrambled Sobol points padded by dimension pairs: stratified, still unbiased.
     #[default]
+    Sobol,
+    /// Independent uniform random numbers.
     Independent,
+}
+
+impl SamplerKind {
+    /// Whether the samples of a pixel are correlated (stratified), so the per-sample variance
+    /// overstates the error of the mean.
+    pub fn is_stratified(self) -> bool {
+        matches!(self, SamplerKind::Sobol)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Sobol => "sobol",
+            SamplerKind::Independent => "independent",
+        }
+    }
+}
+
+enum Source {
+    Independent(Rng),
+    Sobol(PaddedSobol),
 }
 
 /// Uniform numbers for one camera sample (one path). Dimensions are drawn in a fixed order by the
 /// integrator, so the same (seed, pixel, sample) always replays the same path.
 pub struct Sampler {
-    rng: Rng,
+    source: Source,
+    /// Next dimension (pair) index for the Sobol sampler.
+    dim: u32,
 }
 
 impl Sampler {
-    pub fn new(_kind: SamplerKind, seed: u64, pixel: u64, sample: u64) -> Self {
-        Sampler {
-            rng: Rng::for_sample(seed, pixel, sample),
-        }
+    pub fn new(kind: SamplerKind, seed: u64, pixel: u64, sample: u64) -> Self {
+        let source = match kind {
+            SamplerKind::Independent => Source::Independent(Rng::for_sample(seed, pixel, sample)),
+            SamplerKind::Sobol => Source::Sobol(PaddedSobol::new(seed, pixel, sample)),
+        };
+        Sampler { source, dim: 0 }
     }
 
     #[inline]
     pub fn get_1d(&mut self) -> f64 {
-        self.rng.next_f64()
+        match &mut self.source {
+            Source::Independent(rng) => rng.next_f64(),
+            Source::Sobol(s) => {
+                self.dim += 1;
+                s.get_1d(self.dim)
+            }
+        }
     }
 
     #[inline]
     pub fn get_2d(&mut self) -> (f64, f64) {
-        (self.rng.next_f64(), self.rng.next_f64())
+        match &mut self.source {
+            Source::Independent(rng) => (rng.next_f64(), rng.next_f64()),
+            Source::Sobol(s) => {
+                self.dim += 1;
+                s.get_2d(self.dim)
+            }
+        }
     }
 }
