@@ -151,8 +151,9 @@ mod tests {
                 }
             }
         }
-        // 64 pixels in segments of 16: at least 60 neighbour pairs share one.
-        assert!(same_segment_pairs >= 60, "{same_segment_pairs}");
+        // 64 pixels in segments of 16, shifted by the row offset, span at most 5 segments: at
+        // most 4 of the 63 neighbour pairs straddle a boundary.
+        assert!(same_segment_pairs >= 59, "{same_segment_pairs}");
     }
 
     #[test]
