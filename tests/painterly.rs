@@ -322,12 +322,18 @@ fn scene_file_and_cli_layers_set_the_painterly_knobs() {
     assert_eq!(s.integrator, IntegratorKind::Painterly);
     let p = s.painterly;
     assert_eq!(p.hemisphere, Hemisphere::Normal);
-    assert_eq!((p.correlation, p.stroke, p.strength, p.depth), (0.25, 4, 0.75, 20));
+    assert_eq!(
+        (p.correlation, p.stroke, p.strength, p.depth),
+        (0.25, 4, 0.75, 20)
+    );
 
     // Out of range: the scene file names the field and line, the CLI refuses the flag.
     let bad = "[render.painterly]\ncorrelation = 2\n";
     let err = scene::load_str(bad, "bad.toml").unwrap_err().to_string();
-    assert!(err.contains("bad.toml:2") && err.contains("render.painterly.correlation"), "{err}");
+    assert!(
+        err.contains("bad.toml:2") && err.contains("render.painterly.correlation"),
+        "{err}"
+    );
     assert!(Cli::try_parse_from(["ptui", "render", "--stroke", "0"]).is_err());
     assert!(Cli::try_parse_from(["ptui", "render", "--strength", "1.5"]).is_err());
 }

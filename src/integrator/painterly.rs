@@ -136,7 +136,7 @@ pub fn radiance(
         let u_rr = sampler.get_1d();
         if painted {
             // Nothing more can be gathered with zero throughput, and no roulette will end it.
-            if !(beta.max_element() > 0.0) {
+            if !beta.cmpgt(DVec3::ZERO).any() {
                 break;
             }
         } else if !russian_roulette(&mut beta, depth, u_rr) {
