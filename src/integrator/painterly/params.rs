@@ -103,6 +103,20 @@ impl PainterlyParams {
     }
 }
 
+impl std::fmt::Display for PainterlyParams {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "hemisphere {}, correlation {}, stroke {}, strength {}, depth {}",
+            self.hemisphere.name(),
+            self.correlation,
+            self.stroke,
+            self.strength,
+            self.depth
+        )
+    }
+}
+
 /// One layer's painterly settings (the scene file's `[render.painterly]` table, CLI flags, form).
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
