@@ -279,63 +279,28 @@ fn chi_square_rejects_a_wrong_density() {
     );
 }
 
+/// Prints the numbers the thresholds above come from, and what stroke and correlation do to them.
 #[test]
 #[ignore]
 fn measure_autocorrelation() {
+    let paint = |stroke, correlation| {
+        let mut s = settings(IntegratorKind::Painterly, 64, 64, 8, 0);
+        s.painterly.stroke = stroke;
+        s.painterly.correlation = correlation;
+        s
+    };
     for scene in ["smallpaint", "cornell"] {
         for seeds in [(1, 2), (3, 4), (5, 6)] {
             let p =
                 noise_autocorrelation(scene, settings(IntegratorKind::Path, 64, 64, 8, 0), seeds);
-            let q = noise_autocorrelation(
-                scene,
-                settings(IntegratorKind::Painterly, 64, 64, 8, 0),
-                seeds,
+            let q = noise_autocorrelation(scene, paint(16, 1.0), seeds);
+            let s1 = noise_autocorrelation(scene, paint(1, 1.0), seeds);
+            let c0 = noise_autocorrelation(scene, paint(16, 0.0), seeds);
+            println!(
+                "{scene} {seeds:?}: path {p:.3?} painterly {q:.3?} stroke 1 {s1:.3?} correlation 0 {c0:.3?}"
             );
-            println!("{scene} {seeds:?}: path {p:.4?} painterly {q:.4?}");
         }
     }
-}
-
-#[test]
-fn scene_file_and_cli_layers_set_the_painterly_knobs() {
-    use clap::Parser;
-    use ptui::cli::{Cli, Command};
-    let src = "[render]\nintegrator = \"painterly\"\n\n[render.painterly]\nstroke = 4\nstrength = 0.5\n\n\
-               [[sphere]]\ncenter = [0, 0, -3]\nradius = 1\n";
-    let sc = scene::load_str(src, "inline.toml").expect("valid scene");
-    let cli = Cli::try_parse_from([
-        "ptui",
-        "render",
-        "smallpaint",
-        "--hemisphere",
-        "normal",
-        "--correlation",
-        "0.25",
-        "--strength",
-        "0.75",
-    ])
-    .expect("valid flags");
-    let Some(Command::Render(args)) = cli.command else {
-        panic!("not the render command");
-    };
-    let s = RenderSettings::merged(&[&sc.render, &args.settings.overrides()]);
-    assert_eq!(s.integrator, IntegratorKind::Painterly);
-    let p = s.painterly;
-    assert_eq!(p.hemisphere, Hemisphere::Normal);
-    assert_eq!(
-        (p.correlation, p.stroke, p.strength, p.depth),
-        (0.25, 4, 0.75, 20)
-    );
-
-    // Out of range: the scene file names the field and line, the CLI refuses the flag.
-    let bad = "[render.painterly]\ncorrelation = 2\n";
-    let err = scene::load_str(bad, "bad.toml").unwrap_err().to_string();
-    assert!(
-        err.contains("bad.toml:2") && err.contains("render.painterly.correlation"),
-        "{err}"
-    );
-    assert!(Cli::try_parse_from(["ptui", "render", "--stroke", "0"]).is_err());
-    assert!(Cli::try_parse_from(["ptui", "render", "--strength", "1.5"]).is_err());
 }
 
 /// Mean luminance as displayed (channels clamped to [0, 1]), so the few pixels that see a light
