@@ -330,3 +330,45 @@ fn small_lights_are_not_black() {
         "painterly / path brightness {ratio}"
     );
 }
+
+#[test]
+fn scene_file_and_cli_layers_set_the_painterly_knobs() {
+    use clap::Parser;
+    use ptui::cli::{Cli, Command};
+    let src = "[render]\nintegrator = \"painterly\"\n\n[render.painterly]\nstroke = 4\nstrength = 0.5\n\n\
+               [[sphere]]\ncenter = [0, 0, -3]\nradius = 1\n";
+    let sc = scene::load_str(src, "inline.toml").expect("valid scene");
+    let cli = Cli::try_parse_from([
+        "ptui",
+        "render",
+        "smallpaint",
+        "--hemisphere",
+        "normal",
+        "--correlation",
+        "0.25",
+        "--strength",
+        "0.75",
+    ])
+    .expect("valid flags");
+    let Some(Command::Render(args)) = cli.command else {
+        panic!("not the render command");
+    };
+    let s = RenderSettings::merged(&[&sc.render, &args.settings.overrides()]);
+    assert_eq!(s.integrator, IntegratorKind::Painterly);
+    let p = s.painterly;
+    assert_eq!(p.hemisphere, Hemisphere::Normal);
+    assert_eq!(
+        (p.correlation, p.stroke, p.strength, p.depth),
+        (0.25, 4, 0.75, 20)
+    );
+
+    // Out of range: the scene file names the field and line, the CLI refuses the flag.
+    let bad = "[render.painterly]\ncorrelation = 2\n";
+    let err = scene::load_str(bad, "bad.toml").unwrap_err().to_string();
+    assert!(
+        err.contains("bad.toml:2") && err.contains("render.painterly.correlation"),
+        "{err}"
+    );
+    assert!(Cli::try_parse_from(["ptui", "render", "--stroke", "0"]).is_err());
+    assert!(Cli::try_parse_from(["ptui", "render", "--strength", "1.5"]).is_err());
+}
