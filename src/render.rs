@@ -6,7 +6,7 @@
 //! index, so no pixel ever reuses a random stream.
 
 use crate::film::Film;
-use crate::integrator::{self, depth_limit};
+use crate::integrator;
 use crate::math::DVec3;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -191,10 +191,10 @@ pub fn sample_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, pa
         y as f64 + jy,
     );
     integrator::radiance(
-        settings.integrator,
+        settings,
         scene,
         ray,
         &mut sampler,
-        depth_limit(settings),
+        integrator::PixelSample { x, y, pass },
     )
 }

@@ -6,13 +6,17 @@
 //! width = 320
 //! height = 240
 //! spp = 256
-//! integrator = "path"     # path | naive
+//! integrator = "path"     # path | naive | painterly
 //! max_depth = 12          # default: unlimited (Russian roulette ends paths)
 //! seed = 0
 //! exposure = 1.0
 //! tonemap = "clamp"       # clamp | reinhard | aces
+//!
+//! [render.painterly]      # see `integrator::painterly::params`
+//! strength = 1.0
 //! ```
 
+pub use crate::integrator::painterly::params::{Hemisphere, PainterlyOverrides, PainterlyParams};
 use crate::sampling::SamplerKind;
 use serde::{Deserialize, Serialize};
 
@@ -24,6 +28,9 @@ pub enum IntegratorKind {
     Path,
     /// BSDF sampling only, emission gathered when a path hits it (smallpt's estimator).
     Naive,
+    /// smallpaint's deliberately wrong, correlated diffuse bounce: brush strokes (an art tool,
+    /// not an estimator of anything).
+    Painterly,
 }
 
 impl IntegratorKind {
@@ -31,6 +38,7 @@ impl IntegratorKind {
         match self {
             IntegratorKind::Path => "path",
             IntegratorKind::Naive => "naive",
+            IntegratorKind::Painterly => "painterly",
         }
     }
 }
@@ -73,6 +81,8 @@ pub struct RenderSettings {
     pub tonemap: Tonemap,
     /// Worker threads; 0 means one per core.
     pub threads: usize,
+    /// Knobs of the painterly integrator (unused by the others).
+    pub painterly: PainterlyParams,
 }
 
 impl Default for RenderSettings {
@@ -88,6 +98,7 @@ impl Default for RenderSettings {
             exposure: 1.0,
             tonemap: Tonemap::Clamp,
             threads: 0,
+            painterly: PainterlyParams::default(),
         }
     }
 }
@@ -119,6 +130,9 @@ pub struct SettingsOverrides {
     pub exposure: Option<f64>,
     pub tonemap: Option<Tonemap>,
     pub threads: Option<usize>,
+    /// The `[render.painterly]` table.
+    #[serde(default)]
+    pub painterly: PainterlyOverrides,
 }
 
 impl RenderSettings {
@@ -131,6 +145,7 @@ impl RenderSettings {
         if let Some(d) = o.max_depth {
             self.max_depth = Some(d);
         }
+        self.painterly.apply(&o.painterly);
     }
 
     /// Defaults, then each layer in order.
@@ -160,6 +175,7 @@ impl RenderSettings {
                 self.exposure
             ));
         }
+        self.painterly.validate()?;
         let need = self.width as u64 * self.height as u64 * BYTES_PER_PIXEL;
         if let Some(avail) = available_memory() {
             if need > avail {

@@ -2,8 +2,9 @@
 
 pub mod render;
 
+use crate::integrator::painterly::params::{parse_unit, MAX_PAINT_DEPTH, MAX_STROKE};
 use crate::sampling::SamplerKind;
-use crate::settings::{IntegratorKind, SettingsOverrides, Tonemap};
+use crate::settings::{Hemisphere, IntegratorKind, PainterlyOverrides, SettingsOverrides, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -72,6 +73,21 @@ pub struct SettingsArgs {
     pub exposure: Option<f64>,
     #[arg(long, value_enum)]
     pub tonemap: Option<Tonemap>,
+    /// Painterly: hemisphere of the bounce's h (world-z is smallpaint's).
+    #[arg(long, value_enum, help_heading = "Painterly")]
+    pub hemisphere: Option<Hemisphere>,
+    /// Painterly: how tied the two angles of h are, 0 (independent) ..= 1 (identical).
+    #[arg(long, value_parser = parse_unit, help_heading = "Painterly")]
+    pub correlation: Option<f64>,
+    /// Painterly: pixels along a row sharing one sequence segment (stroke length).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_STROKE as i64), help_heading = "Painterly")]
+    pub stroke: Option<u32>,
+    /// Painterly: probability of the painterly bounce at a diffuse or glass vertex, 0 ..= 1.
+    #[arg(long, value_parser = parse_unit, help_heading = "Painterly")]
+    pub strength: Option<f64>,
+    /// Painterly: bounce cap of a path once it has gone painterly (default 20, smallpaint's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_PAINT_DEPTH as i64), help_heading = "Painterly")]
+    pub paint_depth: Option<u32>,
 }
 
 impl SettingsArgs {
@@ -87,6 +103,13 @@ impl SettingsArgs {
             threads: self.threads.map(|t| t as usize),
             exposure: self.exposure,
             tonemap: self.tonemap,
+            painterly: PainterlyOverrides {
+                hemisphere: self.hemisphere,
+                correlation: self.correlation,
+                stroke: self.stroke,
+                strength: self.strength,
+                depth: self.paint_depth,
+            },
             ..Default::default()
         }
     }

@@ -4,7 +4,7 @@ use super::RenderArgs;
 use crate::output;
 use crate::render::Renderer;
 use crate::scene::{self, builtin};
-use crate::settings::RenderSettings;
+use crate::settings::{IntegratorKind, RenderSettings};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::sync::atomic::AtomicBool;
@@ -63,7 +63,10 @@ pub fn summary(r: &Renderer) -> String {
         w = s.width,
         h = s.height,
         spp = st.complete_passes,
-        integ = s.integrator.name(),
+        integ = match s.integrator {
+            IntegratorKind::Painterly => format!("painterly ({})", s.painterly),
+            kind => kind.name().to_string(),
+        },
         seed = s.seed,
         threads = r.threads(),
         time = st.elapsed.as_secs_f64(),

@@ -2,6 +2,7 @@
 //! immutable scene and a per-sample [`Sampler`]; the closed set is dispatched by one `match`.
 
 pub mod naive;
+pub mod painterly;
 pub mod path;
 
 use crate::math::{max_component, DVec3, Ray};
@@ -40,17 +41,32 @@ pub fn depth_limit(settings: &RenderSettings) -> u32 {
     settings.max_depth.unwrap_or(u32::MAX)
 }
 
-/// Radiance along `ray` by the chosen integrator.
+/// Which camera sample a radiance estimate is for: the painterly integrator ties its random
+/// numbers to the pixel's position, the others only use the sampler.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PixelSample {
+    pub x: u32,
+    pub y: u32,
+    pub pass: u32,
+}
+
+/// Radiance along `ray` by the integrator `settings` choose.
 #[inline]
 pub fn radiance(
-    kind: IntegratorKind,
+    settings: &RenderSettings,
     scene: &Scene,
     ray: Ray,
     sampler: &mut Sampler,
-    max_depth: u32,
+    px: PixelSample,
 ) -> DVec3 {
-    match kind {
+    let max_depth = depth_limit(settings);
+    match settings.integrator {
         IntegratorKind::Path => path::radiance(scene, ray, sampler, max_depth),
         IntegratorKind::Naive => naive::radiance(scene, ray, sampler, max_depth),
+        IntegratorKind::Painterly => {
+            let p = &settings.painterly;
+            let stream = painterly::stream::PaintStream::new(settings.seed, px.x, px.y, px.pass, p);
+            painterly::radiance(scene, ray, sampler, max_depth, p, &stream)
+        }
     }
 }

@@ -7,6 +7,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "cornell-small-light",
         include_str!("../../scenes/cornell-small-light.toml"),
     ),
+    ("smallpaint", include_str!("../../scenes/smallpaint.toml")),
 ];
 
 /// The scene the TUI and `render` open without an argument.

@@ -1,0 +1,202 @@
+//! Painterly mode after Zsolnai-Fehér's smallpaint: a path tracer that, with probability
+//! `strength` at each diffuse vertex, takes smallpaint's deliberately "wrong" bounce, and whose
+//! numbers for it come from one base-2 sequence shared by neighbouring pixels (see [`stream`]).
+//! The correlation of those numbers, not noise, paints the brush strokes.
+//!
+//! Everything else is the path integrator (`path.rs`, which stays untouched): next-event
+//! estimation at diffuse vertices, so small lights are not black, and the same sample dimensions
+//! in the same order, so `strength = 0` reproduces the `path` image bit for bit. The painterly
+//! decisions draw from a hashed stream of their own, a function of (seed, pixel, pass, bounce).
+//!
+//! At a painterly vertex:
+//! - **diffuse**: h uniform on the hemisphere around world +z (or the normal), new direction
+//!   normalize(N + h), path weight (1 + N.h) * albedo ([`bounce`]).
+//! - **glass**: refraction only, as in smallpaint (total internal reflection ends the path).
+//! - **mirror**: unchanged.
+//!
+//! MIS: a painterly bounce has no proper pdf, so the power heuristic cannot weigh it against
+//! light sampling. We count direct light at a painterly vertex by **next-event estimation only**:
+//! its light sample gets weight 1, and emission that the painterly direction happens to hit is not
+//! added (it would count the same light twice). Indirect light still flows through the painterly
+//! bounce. Emission after a delta bounce or from the camera counts in full, as in `path`.
+//!
+//! Once a path has taken a painterly bounce it has no Russian roulette (its weights are not an
+//! unbiased estimate for roulette to preserve, and smallpaint has none) and ends after
+//! `painterly.depth` bounces. Degenerate bounces (N + h ~ 0) and non-finite directions or weights
+//! end the path with what it has gathered, so they never reach the film.
+
+pub mod bounce;
+pub mod params;
+pub mod stream;
+
+use self::bounce::painterly_direction;
+use self::params::PainterlyParams;
+use self::stream::PaintStream;
+use super::russian_roulette;
+use crate::geometry::spawn_origin;
+use crate::material::{fresnel, BsdfSample, Material, MaterialKind};
+use crate::math::{DVec3, Ray};
+use crate::sampling::warp::power_heuristic;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+pub fn radiance(
+    scene: &Scene,
+    mut ray: Ray,
+    sampler: &mut Sampler,
+    max_depth: u32,
+    params: &PainterlyParams,
+    stream: &PaintStream,
+) -> DVec3 {
+    let mut l = DVec3::ZERO;
+    let mut beta = DVec3::ONE;
+    let mut depth = 0u32;
+    // Whether the previous bounce was a delta lobe (the camera counts as one).
+    let mut specular = true;
+    let mut prev_p = ray.o;
+    let mut prev_pdf_bsdf = 0.0;
+    let nee = scene.has_lights();
+    // Whether the previous bounce was a painterly diffuse one (its emission hit is not counted).
+    let mut prev_painterly = false;
+    // Whether any bounce so far was painterly: no roulette from then on, the fixed cap instead.
+    let mut painted = false;
+    let paint_depth = max_depth.min(params.depth);
+    loop {
+        let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
+            l += beta * scene.background;
+            break;
+        };
+        let material = scene.material(&hit);
+        let prim = &scene.prims[hit.prim as usize];
+
+        if material.is_emissive() {
+            let weight = match prim.light {
+                // Direct light of a painterly vertex was counted by its light sample alone.
+                Some(_) if prev_painterly && nee => 0.0,
+                Some(light) if !specular && nee => {
+                    let pdf_light = scene.lights.pdf(light as usize, prev_p, ray.d);
+                    power_heuristic(prev_pdf_bsdf, pdf_light)
+                }
+                _ => 1.0,
+            };
+            l += beta * material.emission * weight;
+        }
+        if depth >= if painted { paint_depth } else { max_depth } {
+            break;
+        }
+        let wo = -ray.d;
+        let paint_here = paints(material) && stream.paints(depth);
+
+        if nee && !material.is_delta() {
+            let u_light = sampler.get_1d();
+            let u = sampler.get_2d();
+            if let Some(ls) = scene.lights.sample(hit.p, u_light, u) {
+                let e = material.eval(wo, ls.wi, hit.n);
+                if e.f_cos.max_element() > 0.0 && ls.pdf > 0.0 {
+                    // Visible if the first hit along the shadow ray is the sampled light itself.
+                    let shadow = Ray::new(spawn_origin(hit.p, hit.n, hit.err, ls.wi), ls.wi);
+                    if scene
+                        .intersect(&shadow, f64::INFINITY)
+                        .is_some_and(|h| h.prim == ls.prim)
+                    {
+                        let w = if paint_here {
+                            1.0
+                        } else {
+                            power_heuristic(ls.pdf, e.pdf)
+                        };
+                        l += beta * e.f_cos * ls.le * (w / ls.pdf);
+                    }
+                }
+            }
+        } else if nee {
+            // Keep the dimension count per bounce fixed, exactly as `path` does.
+            sampler.get_1d();
+            sampler.get_2d();
+        }
+
+        // Drawn even when the painterly bounce does not use them, so the dimensions of later
+        // vertices stay where `path` has them.
+        let u_lobe = sampler.get_1d();
+        let u = sampler.get_2d();
+        let sample = if paint_here {
+            painterly_sample(material, wo, hit.n, params, stream, depth)
+        } else {
+            material.sample(wo, hit.n, u_lobe, u)
+        };
+        let Some(bs) = sample else {
+            break;
+        };
+        beta *= bs.weight;
+        specular = bs.delta;
+        prev_pdf_bsdf = bs.pdf;
+        prev_p = hit.p;
+        prev_painterly = paint_here && !bs.delta;
+        painted |= paint_here;
+        depth += 1;
+        let u_rr = sampler.get_1d();
+        if painted {
+            // Nothing more can be gathered with zero throughput, and no roulette will end it.
+            if !beta.cmpgt(DVec3::ZERO).any() {
+                break;
+            }
+        } else if !russian_roulette(&mut beta, depth, u_rr) {
+            break;
+        }
+        ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
+    }
+    l
+}
+
+/// Materials whose bounce painterly mode replaces.
+#[inline]
+fn paints(material: &Material) -> bool {
+    matches!(
+        material.kind,
+        MaterialKind::Diffuse | MaterialKind::Glass { .. }
+    )
+}
+
+/// The painterly replacement of `material.sample`: `None` ends the path.
+#[inline]
+fn painterly_sample(
+    material: &Material,
+    wo: DVec3,
+    n: DVec3,
+    params: &PainterlyParams,
+    stream: &PaintStream,
+    depth: u32,
+) -> Option<BsdfSample> {
+    match material.kind {
+        MaterialKind::Diffuse => {
+            // Two-sided, like the correct diffuse: the normal on the side the path arrived from.
+            let ns = if wo.dot(n) >= 0.0 { n } else { -n };
+            let (u1, u2) = stream.angles(depth);
+            let b = painterly_direction(ns, params.hemisphere, u1, u2)?;
+            let weight = material.color * b.factor;
+            if !weight.is_finite() {
+                return None;
+            }
+            Some(BsdfSample {
+                wi: b.wi,
+                weight,
+                // Not a density: marks the bounce as non-delta; its emission hit is not counted.
+                pdf: 0.0,
+                delta: false,
+            })
+        }
+        MaterialKind::Glass { ior } => {
+            let entering = wo.dot(n) > 0.0;
+            let eta = if entering { ior } else { 1.0 / ior };
+            if fresnel::dielectric(wo.dot(n).abs(), eta).reflectance >= 1.0 {
+                // smallpaint's glass has no reflection: total internal reflection ends the path.
+                return None;
+            }
+            // u_lobe = 1 > reflectance selects the refraction lobe; its weight is already the
+            // tint over eta^2 (radiance compression), the 1 - F of choosing it cancelling.
+            material
+                .sample(wo, n, 1.0, (0.0, 0.0))
+                .filter(|s| s.wi.is_finite() && s.weight.is_finite())
+        }
+        MaterialKind::Mirror => material.sample(wo, n, 0.0, (0.0, 0.0)),
+    }
+}
