@@ -11,6 +11,7 @@
 //! seed = 0
 //! exposure = 1.0
 //! tonemap = "clamp"       # clamp | reinhard | aces
+//! target_error = 0.01     # optional: stop once the estimated relative error is this low
 //! ```
 
 use crate::sampling::SamplerKind;
@@ -73,6 +74,9 @@ pub struct RenderSettings {
     pub tonemap: Tonemap,
     /// Worker threads; 0 means one per core.
     pub threads: usize,
+    /// Stop once the film's estimated relative error (`ErrorEstimate::relative`) is at or below
+    /// this, checked after every pass; `spp` stays the upper bound.
+    pub target_error: Option<f64>,
 }
 
 impl Default for RenderSettings {
@@ -88,6 +92,7 @@ impl Default for RenderSettings {
             exposure: 1.0,
             tonemap: Tonemap::Clamp,
             threads: 0,
+            target_error: None,
         }
     }
 }
@@ -119,6 +124,11 @@ pub struct SettingsOverrides {
     pub exposure: Option<f64>,
     pub tonemap: Option<Tonemap>,
     pub threads: Option<usize>,
+    #[serde(
+        default,
+        deserialize_with = "crate::scene::description::de_positive_opt"
+    )]
+    pub target_error: Option<f64>,
 }
 
 impl RenderSettings {
@@ -130,6 +140,9 @@ impl RenderSettings {
         take!(width, height, spp, seed, integrator, sampler, exposure, tonemap, threads);
         if let Some(d) = o.max_depth {
             self.max_depth = Some(d);
+        }
+        if let Some(e) = o.target_error {
+            self.target_error = Some(e);
         }
     }
 
@@ -159,6 +172,11 @@ impl RenderSettings {
                 "exposure must be a finite number > 0, got {}",
                 self.exposure
             ));
+        }
+        if let Some(e) = self.target_error {
+            if !(e.is_finite() && e > 0.0) {
+                return Err(format!("target_error must be a finite number > 0, got {e}"));
+            }
         }
         let need = self.width as u64 * self.height as u64 * BYTES_PER_PIXEL;
         if let Some(avail) = available_memory() {

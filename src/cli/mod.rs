@@ -1,5 +1,6 @@
 //! The command line: clap definitions and one module per subcommand. `main.rs` only dispatches.
 
+pub mod converge;
 pub mod render;
 
 use crate::settings::{IntegratorKind, SettingsOverrides, Tonemap};
@@ -25,6 +26,8 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene headless to a PNG or EXR file.
     Render(RenderArgs),
+    /// Measure error against render time for one or more integrators: CSV + log-log plot.
+    Converge(converge::ConvergeArgs),
     /// List the built-in scenes.
     Scenes,
 }
@@ -41,6 +44,10 @@ pub struct RenderArgs {
     /// Print no progress bar.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Also save each pixel's standard error: .exr = linear per-channel values, .png = grey
+    /// normalised to the 99th percentile.
+    #[arg(long, value_name = "FILE")]
+    pub error_map: Option<PathBuf>,
 }
 
 /// Flags that override the scene file's `[render]` table.
@@ -68,6 +75,10 @@ pub struct SettingsArgs {
     pub exposure: Option<f64>,
     #[arg(long, value_enum)]
     pub tonemap: Option<Tonemap>,
+    /// Stop once the estimated relative error is at or below E (e.g. 0.01), checked after every
+    /// pass; --spp stays the upper bound.
+    #[arg(long, value_name = "E", value_parser = parse_positive)]
+    pub target_error: Option<f64>,
 }
 
 impl SettingsArgs {
@@ -82,6 +93,7 @@ impl SettingsArgs {
             threads: self.threads.map(|t| t as usize),
             exposure: self.exposure,
             tonemap: self.tonemap,
+            target_error: self.target_error,
             ..Default::default()
         }
     }
