@@ -31,6 +31,8 @@ pub struct Checkpoint {
     pub rmse: Option<f64>,
     pub rel_mse: Option<f64>,
     pub est_rmse: f64,
+    /// The film's estimated relative MSE (not in the CSV; `--target-error` uses its root).
+    pub est_rel_mse: f64,
 }
 
 /// One integrator's checkpoints, in time order.
@@ -112,6 +114,7 @@ impl Schedule {
 pub fn measure(r: &Renderer, reference: Option<&LinearImage>) -> Checkpoint {
     let st = r.stats();
     let film = r.film();
+    let est = film.error_estimate();
     let (rmse, rel_mse) = match reference {
         Some(reference) => {
             let mean = film.mean_rgb_f32();
@@ -128,7 +131,8 @@ pub fn measure(r: &Renderer, reference: Option<&LinearImage>) -> Checkpoint {
         samples_per_second: st.samples_per_second(),
         rmse,
         rel_mse,
-        est_rmse: film.error_estimate().rmse,
+        est_rmse: est.rmse,
+        est_rel_mse: est.rel_mse,
     }
 }
 
@@ -309,6 +313,7 @@ mod tests {
                     rmse: Some(e),
                     rel_mse: Some(e * e),
                     est_rmse: e,
+                    est_rel_mse: e * e,
                 })
                 .collect(),
         }

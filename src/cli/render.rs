@@ -96,6 +96,9 @@ pub fn stop_reason(r: &Renderer) -> String {
         Some(e) if r.target_error_reached() => {
             format!("stopped at target error {e} after {spp} spp")
         }
+        Some(e) if spp >= r.settings.spp => {
+            format!("target error {e} not reached within the spp limit: stopped after {spp} spp (raise --spp)")
+        }
         Some(e) => format!("target error {e} not reached: stopped after {spp} spp"),
         None => format!("stopped after {spp} spp"),
     }
