@@ -18,7 +18,9 @@ use std::path::{Path, PathBuf};
 pub enum ErrorMapError {
     #[error("{}: unsupported error map format (use .exr for linear values or .png)", .0.display())]
     Format(PathBuf),
-    #[error("the error map needs at least 2 samples in every pixel (a standard error needs a variance)")]
+    #[error(
+        "the error map needs at least 2 samples in every pixel (a standard error needs a variance)"
+    )]
     TooFewSamples,
     #[error("{}: cannot encode error map: {source}", .path.display())]
     Encode {
@@ -143,6 +145,7 @@ pub fn check_format(path: &Path) -> Result<(), ErrorMapError> {
 mod tests {
     use super::*;
     use crate::math::DVec3;
+    use rayon::iter::ParallelIterator;
 
     fn film_with(samples: &[[f64; 2]]) -> Film {
         // A 2x1 film; each pass adds samples[k][pixel].
@@ -180,8 +183,14 @@ mod tests {
         let (bytes, scale) = encode(Path::new("e.png"), &film).unwrap();
         let img = image::load_from_memory(&bytes).unwrap().into_luma8();
         // RMS over channels: pixel 0 -> 1, pixel 1 -> sqrt(4/3) = 1.1547 (the largest = p99 of 2).
-        assert_eq!(scale, ErrorMapScale::Normalised((4.0f32 / 3.0).sqrt() as f64));
-        assert_eq!(img.as_raw(), &vec![(255.0 / (4.0f32 / 3.0).sqrt() + 0.5) as u8, 255]);
+        assert_eq!(
+            scale,
+            ErrorMapScale::Normalised((4.0f32 / 3.0).sqrt() as f64)
+        );
+        assert_eq!(
+            img.as_raw(),
+            &vec![(255.0 / (4.0f32 / 3.0).sqrt() + 0.5) as u8, 255]
+        );
         assert!(matches!(
             encode(Path::new("e.jpg"), &film),
             Err(ErrorMapError::Format(_))

@@ -165,7 +165,16 @@ impl Film {
         let (x, y) = ((i as i64) % w, (i as i64) / w);
         let mut sum = DVec3::ZERO;
         let mut n = 0u32;
-        for (dx, dy) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+        for (dx, dy) in [
+            (-1, -1),
+            (0, -1),
+            (1, -1),
+            (-1, 0),
+            (1, 0),
+            (-1, 1),
+            (0, 1),
+            (1, 1),
+        ] {
             let (nx, ny) = (x + dx, y + dy);
             if nx >= 0 && ny >= 0 && nx < w && ny < h {
                 sum += self.mean((ny * w + nx) as usize);

@@ -155,22 +155,22 @@ fn draw<'b>(spec: &PlotSpec, buf: &'b mut [u8]) -> DrawResult<'b> {
     if all.len() < 2 {
         return Err(Box::new(PlotError::Empty));
     }
-    let (t_lo, t_hi) = all
-        .iter()
-        .fold((f64::INFINITY, 0f64), |(lo, hi), p| (lo.min(p.0), hi.max(p.0)));
-    let (e_lo, e_hi) = all
-        .iter()
-        .fold((f64::INFINITY, 0f64), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
+    let (t_lo, t_hi) = all.iter().fold((f64::INFINITY, 0f64), |(lo, hi), p| {
+        (lo.min(p.0), hi.max(p.0))
+    });
+    let (e_lo, e_hi) = all.iter().fold((f64::INFINITY, 0f64), |(lo, hi), p| {
+        (lo.min(p.1), hi.max(p.1))
+    });
 
-    // The 1/sqrt(t) guide passes through the first series' fit at the middle of its range, so
-    // it lies over the data and a line parallel to it converges at the Monte Carlo rate.
+    // The 1/sqrt(t) guide runs 30% below the first series' fit at the middle of its range: near
+    // the data without hiding it, and a line parallel to it converges at the Monte Carlo rate.
     let guide = spec
         .series
         .first()
         .and_then(|s| fit_series(s, spec.metric, spec.fit_from))
         .map(|f| {
             let mid = (f.from_seconds * t_hi).sqrt();
-            let c = f.at(mid) * mid.sqrt();
+            let c = 0.7 * f.at(mid) * mid.sqrt();
             move |t: f64| c / t.sqrt()
         });
     let (mut y_lo, mut y_hi) = (e_lo, e_hi);

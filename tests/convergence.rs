@@ -74,8 +74,14 @@ fn estimated_rmse_tracks_the_measured_rmse_and_path_converges_at_the_monte_carlo
     let mut r = cornell_renderer(settings);
     let schedule = Schedule::log_spaced(0.01, 8).with_spps(&[64, 256, 1024]);
     let cancel = AtomicBool::new(false);
-    let series =
-        convergence::run_series(&mut r, Some(&reference), f64::INFINITY, schedule, &cancel, |_| {});
+    let series = convergence::run_series(
+        &mut r,
+        Some(&reference),
+        f64::INFINITY,
+        schedule,
+        &cancel,
+        |_| {},
+    );
 
     for spp in [64, 256, 1024] {
         let c = series
@@ -101,8 +107,13 @@ fn estimated_rmse_tracks_the_measured_rmse_and_path_converges_at_the_monte_carlo
         // gives only its absolute RMSE.
         let rel_measured = c.rel_mse.unwrap().sqrt();
         let rel_ratio = c.est_rel_mse.sqrt() / rel_measured;
-        println!("{spp} spp: measured relative error {rel_measured:.5}, est/measured {rel_ratio:.3}");
-        assert!((rel_ratio - 1.0).abs() <= 0.25, "{spp} spp: relative ratio {rel_ratio}");
+        println!(
+            "{spp} spp: measured relative error {rel_measured:.5}, est/measured {rel_ratio:.3}"
+        );
+        assert!(
+            (rel_ratio - 1.0).abs() <= 0.25,
+            "{spp} spp: relative ratio {rel_ratio}"
+        );
     }
 
     let fit = convergence::fit_series(&series, Metric::Measured, 1.0).expect("enough checkpoints");
@@ -131,7 +142,10 @@ fn read_csv(path: &std::path::Path) -> Vec<(String, f64, u32, Option<f64>, Optio
         lines.next(),
         Some("integrator,seconds,spp,samples_per_second,rmse,rel_mse,est_rmse")
     );
-    assert_eq!(CSV_HEADER, "integrator,seconds,spp,samples_per_second,rmse,rel_mse,est_rmse");
+    assert_eq!(
+        CSV_HEADER,
+        "integrator,seconds,spp,samples_per_second,rmse,rel_mse,est_rmse"
+    );
     let rows: Vec<_> = lines
         .map(|l| {
             let f: Vec<&str> = l.split(',').collect();
@@ -155,7 +169,9 @@ fn read_csv(path: &std::path::Path) -> Vec<(String, f64, u32, Option<f64>, Optio
             assert!(w[1].2 > w[0].2, "spp not increasing: {w:?}");
         }
     }
-    assert!(rows.iter().all(|r| r.2 >= 2 && r.5 > 0.0 && r.5.is_finite()));
+    assert!(rows
+        .iter()
+        .all(|r| r.2 >= 2 && r.5 > 0.0 && r.5.is_finite()));
     rows
 }
 
@@ -201,7 +217,10 @@ fn converge_writes_the_documented_csv_and_a_valid_png() {
     );
 
     let png = image::open(dir.join("convergence.png")).expect("a valid PNG");
-    assert_eq!((png.width(), png.height()), (ptui::plot::WIDTH, ptui::plot::HEIGHT));
+    assert_eq!(
+        (png.width(), png.height()),
+        (ptui::plot::WIDTH, ptui::plot::HEIGHT)
+    );
     // The two integrators' line colours are on it (blue and vermilion), so lines were drawn.
     let rgb = png.into_rgb8();
     for colour in [[0u8, 114, 178], [213, 94, 0]] {
@@ -227,7 +246,9 @@ fn converge_without_a_reference_leaves_the_measured_columns_empty() {
     .unwrap();
     let rows = read_csv(&dir.join("convergence.csv"));
     assert!(rows.len() >= 2);
-    assert!(rows.iter().all(|r| r.0 == "naive" && r.3.is_none() && r.4.is_none()));
+    assert!(rows
+        .iter()
+        .all(|r| r.0 == "naive" && r.3.is_none() && r.4.is_none()));
     image::open(dir.join("convergence.png")).expect("a valid PNG");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -265,7 +286,10 @@ fn target_error_stops_at_the_first_pass_at_or_below_it() {
     r.render(&AtomicBool::new(false), |r| {
         relative.push(r.film().error_estimate().relative());
         // What the stop checked is what the film reports (up to the order of a parallel sum).
-        let checked = r.checked_error().expect("checked after every pass").relative();
+        let checked = r
+            .checked_error()
+            .expect("checked after every pass")
+            .relative();
         let reported = relative[relative.len() - 1];
         // After one pass there is no variance yet: both are infinite.
         assert!(
@@ -275,7 +299,10 @@ fn target_error_stops_at_the_first_pass_at_or_below_it() {
         true
     });
     let n = relative.len();
-    println!("stopped after {n} passes: {:?}", &relative[n.saturating_sub(3)..]);
+    println!(
+        "stopped after {n} passes: {:?}",
+        &relative[n.saturating_sub(3)..]
+    );
     assert!(r.done() && r.target_error_reached());
     assert_eq!(r.stats().complete_passes as usize, n);
     assert!(n > 2 && n < 100_000, "{n} passes");
@@ -291,7 +318,10 @@ fn target_error_in_the_scene_file_is_read_and_validated() {
     let with = |v: &str| src.replacen("[render]\n", &format!("[render]\ntarget_error = {v}\n"), 1);
     let scene = scene::load_str(&with("0.05"), "cornell.toml").unwrap();
     assert_eq!(scene.render.target_error, Some(0.05));
-    assert_eq!(RenderSettings::merged(&[&scene.render]).target_error, Some(0.05));
+    assert_eq!(
+        RenderSettings::merged(&[&scene.render]).target_error,
+        Some(0.05)
+    );
     assert_eq!(RenderSettings::default().target_error, None);
     for bad in ["0", "-1", "nan", "inf"] {
         let err = scene::load_str(&with(bad), "cornell.toml")
@@ -326,11 +356,13 @@ fn error_map_exr_holds_the_standard_errors_the_estimate_summarises() {
     );
     let map = reference::load(&exr).unwrap();
     assert_eq!((map.width, map.height), (48, 36));
-    let rms = (map.data.iter().map(|&v| (v as f64).powi(2)).sum::<f64>()
-        / map.data.len() as f64)
-        .sqrt();
+    let rms =
+        (map.data.iter().map(|&v| (v as f64).powi(2)).sum::<f64>() / map.data.len() as f64).sqrt();
     let est = r.film().error_estimate().rmse;
-    assert!((rms / est - 1.0).abs() < 1e-5, "map rms {rms}, estimate {est}");
+    assert!(
+        (rms / est - 1.0).abs() < 1e-5,
+        "map rms {rms}, estimate {est}"
+    );
 
     let png = dir.join("err.png");
     error_map::save(&png, r.film()).unwrap();

@@ -203,7 +203,7 @@ fn summarise(
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{name}: {}x{}, seed {}, {threads} threads, {} s per integrator (scene build {:.1} ms, not counted)",
+        "{name}: {}x{}, seed {}, {threads} threads, {} s per integrator (scene build {:.3} ms, not counted)",
         s.width,
         s.height,
         s.seed,
