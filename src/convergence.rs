@@ -136,9 +136,9 @@ pub fn measure(r: &Renderer, reference: Option<&LinearImage>) -> Checkpoint {
     }
 }
 
-/// Render passes until `seconds` of render time, the renderer's own stop (spp, target error) or
-/// `cancel`, measuring at the scheduled checkpoints and after the last pass. Checkpoints need at
-/// least two samples per pixel (a standard error needs a variance). `on_checkpoint` sees each
+/// Render passes until `seconds` of render time (but at least two passes), the renderer's own
+/// stop (spp, target error) or `cancel`, measuring at the scheduled checkpoints and after the last
+/// pass. Checkpoints need at least two samples per pixel (a standard error needs a variance). `on_checkpoint` sees each
 /// one as it is taken (for progress output). The reference, if any, must match the film's size.
 pub fn run_series(
     r: &mut Renderer,
@@ -149,14 +149,16 @@ pub fn run_series(
     mut on_checkpoint: impl FnMut(&Checkpoint),
 ) -> Series {
     let mut points: Vec<Checkpoint> = Vec::new();
-    while !r.done() && r.stats().elapsed.as_secs_f64() < seconds {
+    // At least two passes whatever the time, so that every series has a checkpoint.
+    while !r.done() && (r.stats().elapsed.as_secs_f64() < seconds || r.stats().complete_passes < 2)
+    {
         if r.run_pass(cancel) == PassOutcome::Cancelled {
             break;
         }
         let st = r.stats();
         let t = st.elapsed.as_secs_f64();
         let due = schedule.due(t, st.complete_passes);
-        let last = r.done() || t >= seconds;
+        let last = r.done() || (t >= seconds && st.complete_passes >= 2);
         if st.complete_passes >= 2 && (due || last) {
             let c = measure(r, reference);
             on_checkpoint(&c);
