@@ -273,6 +273,18 @@ pub fn equal_time_ratio(base: &Series, other: &Series, metric: Metric) -> Option
     (b > 0.0).then_some((t, o / b))
 }
 
+/// Error times sqrt(spp) at the last checkpoint of `other` over that of `base`: the ratio of
+/// their errors at equal sample counts (constant for an unbiased estimator), which, unlike the
+/// equal-time ratio, does not depend on how fast (or how loaded) the machine was.
+pub fn per_sample_ratio(base: &Series, other: &Series, metric: Metric) -> Option<f64> {
+    let norm = |s: &Series| {
+        let c = s.points.last()?;
+        metric.of(c).map(|e| e * (c.spp as f64).sqrt())
+    };
+    let (b, o) = (norm(base)?, norm(other)?);
+    (b > 0.0).then_some(o / b)
+}
+
 fn opt(v: Option<f64>) -> String {
     v.map(|v| format!("{v:.6e}")).unwrap_or_default()
 }
@@ -357,6 +369,9 @@ mod tests {
         let (t, ratio) = equal_time_ratio(&base, &other, Metric::Measured).unwrap();
         assert_eq!(t, 9.0);
         assert!((ratio - 2.0).abs() < 1e-12, "{ratio}");
+        // spp 4 (last of base) and 3 (last of other): 0.25 * 2 vs (2/3) * sqrt(3).
+        let per_sample = per_sample_ratio(&base, &other, Metric::Measured).unwrap();
+        assert!((per_sample - (2.0 / 3.0) * 3f64.sqrt() / 0.5).abs() < 1e-12);
         assert_eq!(error_at(&base, Metric::Measured, 0.5), None);
         assert_eq!(error_at(&base, Metric::Measured, 17.0), None);
     }

@@ -257,6 +257,16 @@ fn summarise(
                 if m == Metric::Measured && metric == Metric::Estimated {
                     continue;
                 }
+                if let Some(ratio) = convergence::per_sample_ratio(base, other, m) {
+                    let _ = writeln!(
+                        out,
+                        "per sample: {} {n} * sqrt(spp) / {} {n} * sqrt(spp) = {ratio:.3} \
+                         (error ratio at equal samples per pixel: independent of speed and machine load)",
+                        other.integrator,
+                        base.integrator,
+                        n = m.name(),
+                    );
+                }
                 if let Some((t, ratio)) = convergence::equal_time_ratio(base, other, m) {
                     let _ = writeln!(
                         out,
