@@ -252,6 +252,16 @@ fn draw<'b>(spec: &PlotSpec, buf: &'b mut [u8]) -> DrawResult<'b> {
             .label("1/√t guide (slope -0.5)")
             .legend(move |(x, y)| dashed_legend!(x, y, style));
     }
+    // Say what the legend's slopes are, in the empty lower-left corner of the plot.
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    root.draw(&Text::new(
+        format!(
+            "slope: least-squares fit of ln(error) on ln(t) over checkpoints at t ≥ {}",
+            tick(spec.fit_from) + " s"
+        ),
+        (xr.start + 12, yr.end - 30),
+        (FAMILY, 16).into_font().color(&RGBColor(80, 80, 80)),
+    ))?;
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperRight)
