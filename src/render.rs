@@ -63,7 +63,8 @@ pub struct Renderer {
     pool: Arc<rayon::ThreadPool>,
     stats: RenderStats,
     /// The film's error estimate after the last complete pass, kept only when a target error is
-    /// set (it costs one sweep over the film, about a hundredth of a pass).
+    /// set (it costs one sweep over the film reading 9 means per pixel, against whole paths per
+    /// pixel in a pass).
     error: Option<ErrorEstimate>,
 }
 
