@@ -33,7 +33,9 @@ pub struct ErrorEstimate {
     /// sqrt(mean over pixels and channels of var / n): the RMSE the image is expected to have
     /// against the converged one.
     pub rmse: f64,
-    /// mean over pixels and channels of (var / n) / (mean^2 + 0.01).
+    /// mean over pixels and channels of (var / n) / (m^2 + 0.01), where m, the stand-in for the
+    /// unknown true value, is the mean of the pixel's (up to 8) neighbours' means: see
+    /// [`Film::error_estimate`].
     pub rel_mse: f64,
 }
 
@@ -172,9 +174,18 @@ impl Film {
         (lo, hi)
     }
 
-    /// Whole-image error estimate. `stratified` selects the half-buffer estimator (needed when
-    /// samples within a pixel are not independent, as with the Sobol sampler); otherwise the
+    /// The whole-image error estimate. `stratified` selects the half-buffer variance (needed
+    /// when a pixel's samples are not independent, as with the Sobol sampler); otherwise the
     /// per-sample variance, which has many more degrees of freedom.
+    ///
+    /// The relative error divides each pixel's variance by a value squared, which must not come
+    /// from the pixel's own samples: a rare bright sample (a caustic through the glass ball)
+    /// inflates that pixel's variance *and* its mean, so dividing by its own mean hides exactly
+    /// the noise that matters. Measured on cornell 320x240 against the reference, the own-mean
+    /// version reported 0.12x the true relative error at 2 spp, 0.57x at 16 and 0.85x at 64 (a
+    /// target-error stop fired at 2 spp); the mean of the 8 neighbours' means, independent of the
+    /// pixel's samples, gave 1.69x, 1.13x, 1.03x (1.002x at 256): it errs on the safe side and
+    /// converges. (Jensen: a noisy independent denominator overestimates 1 / (m^2 + 0.01).)
     pub fn error_estimate(&self, stratified: bool) -> ErrorEstimate {
         let (se, rel) = (0..self.pixels())
             .into_par_iter()
@@ -187,7 +198,7 @@ impl Film {
                 if !v.is_finite() {
                     return (f64::INFINITY, f64::INFINITY);
                 }
-                let m = self.mean(i);
+                let m = self.neighbour_mean(i);
                 let rel = v / (m * m + DVec3::splat(0.01));
                 (v.element_sum(), rel.element_sum())
             })
@@ -196,6 +207,36 @@ impl Film {
         ErrorEstimate {
             rmse: (se / n).sqrt(),
             rel_mse: rel / n,
+        }
+    }
+
+    /// Mean of the means of pixel i's neighbours (8, fewer at the border; the pixel's own mean
+    /// on a 1x1 film).
+    fn neighbour_mean(&self, i: usize) -> DVec3 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let (x, y) = ((i as i64) % w, (i as i64) / w);
+        let mut sum = DVec3::ZERO;
+        let mut n = 0u32;
+        for (dx, dy) in [
+            (-1, -1),
+            (0, -1),
+            (1, -1),
+            (-1, 0),
+            (1, 0),
+            (-1, 1),
+            (0, 1),
+            (1, 1),
+        ] {
+            let (nx, ny) = (x + dx, y + dy);
+            if nx >= 0 && ny >= 0 && nx < w && ny < h {
+                sum += self.mean((ny * w + nx) as usize);
+                n += 1;
+            }
+        }
+        if n == 0 {
+            self.mean(i)
+        } else {
+            sum / n as f64
         }
     }
 
@@ -247,5 +288,23 @@ mod tests {
         // even passes: 1, 2 (mean 1.5); odd: 3, 6 (mean 4.5); (1.5 - 4.5)^2 * 2 * 2 / 16.
         assert!((film.half_buffer_variance(0).x - 9.0 / 4.0).abs() < 1e-6);
         assert_eq!(film.mean(0).x, 3.0);
+    }
+
+    #[test]
+    fn relative_error_divides_by_the_neighbours_mean() {
+        // 3x1 film: the middle pixel has samples 0 and 2 (var of mean 1), its neighbours a
+        // constant 3 (no variance). Own mean 1 would give 1 / 1.01; the neighbours' 3 gives
+        // 1 / 9.01. Mean over 3 pixels x 3 channels of that: 3 / 9.01 / 9.
+        let mut film = Film::new(3, 1);
+        for mid in [0.0, 2.0] {
+            film.par_bands(1).for_each(|mut band| {
+                band.add(0, 0, 0, DVec3::splat(3.0));
+                band.add(1, 0, 0, DVec3::splat(mid));
+                band.add(2, 0, 0, DVec3::splat(3.0));
+            });
+        }
+        let e = film.error_estimate(false);
+        assert!((e.rel_mse - 3.0 / 9.01 / 9.0).abs() < 1e-15, "{e:?}");
+        assert!((e.rmse - (3.0f64 / 9.0).sqrt()).abs() < 1e-15, "{e:?}");
     }
 }

@@ -10,6 +10,8 @@
 pub mod accel;
 pub mod camera;
 pub mod cli;
+pub mod convergence;
+pub mod error_map;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
@@ -17,6 +19,7 @@ pub mod light;
 pub mod material;
 pub mod math;
 pub mod output;
+pub mod plot;
 pub mod reference;
 pub mod render;
 pub mod sampling;

@@ -6,6 +6,7 @@ fn main() {
     let cli = Cli::parse();
     let result = match &cli.command {
         Some(Command::Render(args)) => cli::render::run(args),
+        Some(Command::Converge(args)) => cli::converge::run(args),
         Some(Command::Scenes) => {
             for name in builtin::names() {
                 println!("{name}");
@@ -18,6 +19,7 @@ fn main() {
             settings: cli.settings.clone(),
             output: "render.png".into(),
             quiet: false,
+            error_map: None,
         }),
     };
     if let Err(e) = result {

@@ -5,7 +5,7 @@
 //! the thread count. A cancelled pass still counts as started: resuming goes on with the next pass
 //! index, so no pixel ever reuses a random stream.
 
-use crate::film::Film;
+use crate::film::{ErrorEstimate, Film};
 use crate::integrator;
 use crate::math::DVec3;
 use crate::sampling::Sampler;
@@ -62,6 +62,10 @@ pub struct Renderer {
     film: Film,
     pool: Arc<rayon::ThreadPool>,
     stats: RenderStats,
+    /// The film's error estimate after the last complete pass, kept only when a target error is
+    /// set (it costs one sweep over the film reading 9 means per pixel, against whole paths per
+    /// pixel in a pass).
+    error: Option<ErrorEstimate>,
 }
 
 /// A rayon pool with `threads` workers (0 = one per core).
@@ -93,6 +97,7 @@ impl Renderer {
             settings,
             pool,
             stats: RenderStats::default(),
+            error: None,
         })
     }
 
@@ -114,9 +119,23 @@ impl Renderer {
             .error_estimate(self.settings.sampler.is_stratified())
     }
 
-    /// Whether the target sample count has been reached.
+    /// Whether the target sample count or the target error has been reached.
     pub fn done(&self) -> bool {
-        self.stats.complete_passes >= self.settings.spp
+        self.stats.complete_passes >= self.settings.spp || self.target_error_reached()
+    }
+
+    /// Whether `settings.target_error` is set and the estimated relative error after the last
+    /// complete pass is at or below it.
+    pub fn target_error_reached(&self) -> bool {
+        match (self.settings.target_error, self.error) {
+            (Some(target), Some(err)) => err.relative() <= target,
+            _ => false,
+        }
+    }
+
+    /// The error estimate the stop criterion last checked (None without a target error).
+    pub fn checked_error(&self) -> Option<ErrorEstimate> {
+        self.error
     }
 
     /// Add one sample to every pixel, unless cancelled on the way.
@@ -158,16 +177,23 @@ impl Renderer {
         let done = samples.into_inner();
         self.stats.samples += done;
         self.stats.invalid += invalid.into_inner();
-        self.stats.elapsed += started.elapsed();
-        if done == settings.pixels() as u64 {
+        let outcome = if done == settings.pixels() as u64 {
             self.stats.complete_passes += 1;
+            if settings.target_error.is_some() {
+                // On the render pool, and counted in the render time: the check is part of it.
+                let film = &self.film;
+                let stratified = settings.sampler.is_stratified();
+                self.error = Some(self.pool.install(|| film.error_estimate(stratified)));
+            }
             PassOutcome::Complete
         } else {
             PassOutcome::Cancelled
-        }
+        };
+        self.stats.elapsed += started.elapsed();
+        outcome
     }
 
-    /// Render until the target spp, `cancel`, or `on_pass` returning false.
+    /// Render until the target spp or target error, `cancel`, or `on_pass` returning false.
     pub fn render(&mut self, cancel: &AtomicBool, mut on_pass: impl FnMut(&Renderer) -> bool) {
         while !self.done() {
             if self.run_pass(cancel) == PassOutcome::Cancelled || !on_pass(self) {

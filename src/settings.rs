@@ -14,6 +14,7 @@
 //!
 //! [render.painterly]      # see `integrator::painterly::params`
 //! strength = 1.0
+//! target_error = 0.01     # optional: stop once the estimated relative error is this low
 //! ```
 
 pub use crate::integrator::painterly::params::{Hemisphere, PainterlyOverrides, PainterlyParams};
@@ -83,6 +84,9 @@ pub struct RenderSettings {
     pub threads: usize,
     /// Knobs of the painterly integrator (unused by the others).
     pub painterly: PainterlyParams,
+    /// Stop once the film's estimated relative error (`ErrorEstimate::relative`) is at or below
+    /// this, checked after every pass; `spp` stays the upper bound.
+    pub target_error: Option<f64>,
 }
 
 impl Default for RenderSettings {
@@ -99,6 +103,7 @@ impl Default for RenderSettings {
             tonemap: Tonemap::Clamp,
             threads: 0,
             painterly: PainterlyParams::default(),
+            target_error: None,
         }
     }
 }
@@ -133,6 +138,11 @@ pub struct SettingsOverrides {
     /// The `[render.painterly]` table.
     #[serde(default)]
     pub painterly: PainterlyOverrides,
+    #[serde(
+        default,
+        deserialize_with = "crate::scene::description::de_positive_opt"
+    )]
+    pub target_error: Option<f64>,
 }
 
 impl RenderSettings {
@@ -146,6 +156,9 @@ impl RenderSettings {
             self.max_depth = Some(d);
         }
         self.painterly.apply(&o.painterly);
+        if let Some(e) = o.target_error {
+            self.target_error = Some(e);
+        }
     }
 
     /// Defaults, then each layer in order.
@@ -176,6 +189,11 @@ impl RenderSettings {
             ));
         }
         self.painterly.validate()?;
+        if let Some(e) = self.target_error {
+            if !(e.is_finite() && e > 0.0) {
+                return Err(format!("target_error must be a finite number > 0, got {e}"));
+            }
+        }
         let need = self.width as u64 * self.height as u64 * BYTES_PER_PIXEL;
         if let Some(avail) = available_memory() {
             if need > avail {

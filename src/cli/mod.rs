@@ -1,5 +1,6 @@
 //! The command line: clap definitions and one module per subcommand. `main.rs` only dispatches.
 
+pub mod converge;
 pub mod render;
 
 use crate::integrator::painterly::params::{parse_unit, MAX_PAINT_DEPTH, MAX_STROKE};
@@ -27,6 +28,8 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene headless to a PNG or EXR file.
     Render(RenderArgs),
+    /// Measure error against render time for one or more integrators: CSV + log-log plot.
+    Converge(converge::ConvergeArgs),
     /// List the built-in scenes.
     Scenes,
 }
@@ -43,6 +46,10 @@ pub struct RenderArgs {
     /// Print no progress bar.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Also save each pixel's standard error: .exr = linear per-channel values, .png = grey
+    /// normalised to the 99th percentile.
+    #[arg(long, value_name = "FILE")]
+    pub error_map: Option<PathBuf>,
 }
 
 /// Flags that override the scene file's `[render]` table.
@@ -88,6 +95,10 @@ pub struct SettingsArgs {
     /// Painterly: bounce cap of a path once it has gone painterly (default 20, smallpaint's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_PAINT_DEPTH as i64), help_heading = "Painterly")]
     pub paint_depth: Option<u32>,
+    /// Stop once the estimated relative error is at or below E (e.g. 0.01), checked after every
+    /// pass; --spp stays the upper bound.
+    #[arg(long, value_name = "E", value_parser = parse_positive)]
+    pub target_error: Option<f64>,
 }
 
 impl SettingsArgs {
@@ -110,7 +121,7 @@ impl SettingsArgs {
                 strength: self.strength,
                 depth: self.paint_depth,
             },
-            ..Default::default()
+            target_error: self.target_error,
         }
     }
 }

@@ -1,6 +1,7 @@
 //! `ptui render`: headless progressive render with a progress bar and a summary.
 
 use super::RenderArgs;
+use crate::error_map;
 use crate::output;
 use crate::render::Renderer;
 use crate::scene::{self, builtin};
@@ -16,6 +17,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let settings = RenderSettings::merged(&[&scene.render, &args.settings.overrides()]);
     // Fail on a bad output path before spending minutes rendering.
     output::encode(&args.output, 1, 1, &[0.0; 3], 1.0, settings.tonemap)?;
+    if let Some(path) = &args.error_map {
+        error_map::check_format(path)?;
+        if settings.spp < 2 {
+            return Err(error_map::ErrorMapError::TooFewSamples.into());
+        }
+    }
     let mut renderer = Renderer::new(scene.clone(), settings.clone())?;
 
     let bar = if args.quiet {
@@ -46,6 +53,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     )?;
     print!("{}", summary(&renderer));
     println!("wrote {}", args.output.display());
+    if let Some(path) = &args.error_map {
+        let scale = error_map::save(path, renderer.film())?;
+        println!("wrote error map {} ({scale})", path.display());
+    }
     Ok(())
 }
 
@@ -58,7 +69,8 @@ pub fn summary(r: &Renderer) -> String {
         "{name}: {w}x{h}, {spp} spp, {integ} integrator, seed {seed}, {threads} threads\n\
          time {time:.2} s (scene build {build:.1} ms), {rate:.2} M samples/s, invalid samples {invalid}\n\
          {report}\n\
-         estimated error: rmse {rmse:.5}, relative {rel:.5}\n",
+         estimated error: rmse {rmse:.5}, relative {rel:.5}\n\
+         {stop}\n",
         name = r.scene.name,
         w = s.width,
         h = s.height,
@@ -76,5 +88,21 @@ pub fn summary(r: &Renderer) -> String {
         report = r.scene.report,
         rmse = err.rmse,
         rel = err.relative(),
+        stop = stop_reason(r),
     )
+}
+
+/// Why the render ended, in the words the summary uses.
+pub fn stop_reason(r: &Renderer) -> String {
+    let spp = r.stats().complete_passes;
+    match r.settings.target_error {
+        Some(e) if r.target_error_reached() => {
+            format!("stopped at target error {e} after {spp} spp")
+        }
+        Some(e) if spp >= r.settings.spp => {
+            format!("target error {e} not reached within the spp limit: stopped after {spp} spp (raise --spp)")
+        }
+        Some(e) => format!("target error {e} not reached: stopped after {spp} spp"),
+        None => format!("stopped after {spp} spp"),
+    }
 }

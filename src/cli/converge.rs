@@ -1,0 +1,287 @@
+//! `ptui converge`: render a scene with each integrator for the same time and settings, record
+//! the error at log-spaced checkpoints (DIR/convergence.csv), plot error against time
+//! (DIR/convergence.png), and report the fitted slopes and the equal-time error ratios
+//! (stdout and DIR/summary.txt).
+
+use super::{parse_positive, parse_size};
+use crate::convergence::{self, Metric, Schedule, Series};
+use crate::output;
+use crate::plot::{self, PlotSpec};
+use crate::reference;
+use crate::render::{build_pool, Renderer};
+use crate::scene::{self, builtin};
+use crate::settings::{IntegratorKind, RenderSettings, SettingsOverrides};
+use anyhow::Context;
+use clap::Args;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+/// Checkpoints per factor of ten in time: ~20 points over a 20 s run.
+const PER_DECADE: u32 = 8;
+/// The first scheduled checkpoint; earlier passes are recorded from the second one on.
+const FIRST_CHECKPOINT: f64 = 0.01;
+
+#[derive(Args, Debug, Clone)]
+pub struct ConvergeArgs {
+    /// Scene file or built-in scene name; default: cornell.
+    pub scene: Option<String>,
+    /// Linear reference image (EXR) of the same size: adds measured rmse and rel_mse.
+    #[arg(long, value_name = "REF.exr")]
+    pub reference: Option<PathBuf>,
+    /// Render time per integrator, scene build excluded.
+    #[arg(long, default_value_t = 10.0, value_parser = parse_positive)]
+    pub seconds: f64,
+    /// Image size as WIDTHxHEIGHT (default: the scene's).
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Integrators to compare, comma-separated; ratios are taken against the first.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "path,naive")]
+    pub integrator: Vec<IntegratorKind>,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// Random seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Longest path in bounces (default: the scene's, else unlimited).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Output directory (created if missing).
+    #[arg(short, long, value_name = "DIR")]
+    pub output: PathBuf,
+    /// Print only the summary, not each checkpoint.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Everything one run measured.
+pub struct ConvergeReport {
+    pub series: Vec<Series>,
+    pub metric: Metric,
+    pub fit_from: f64,
+    pub summary: String,
+}
+
+pub fn run(args: &ConvergeArgs) -> anyhow::Result<()> {
+    let report = converge(args)?;
+    print!("{}", report.summary);
+    Ok(())
+}
+
+/// Run the measurement and write DIR/convergence.csv, DIR/convergence.png, DIR/summary.txt.
+pub fn converge(args: &ConvergeArgs) -> anyhow::Result<ConvergeReport> {
+    if args.integrator.is_empty() {
+        anyhow::bail!("--integrator needs at least one integrator");
+    }
+    let spec = args.scene.as_deref().unwrap_or(builtin::DEFAULT);
+    let scene = Arc::new(scene::load(spec)?);
+    let cli = SettingsOverrides {
+        width: args.size.map(|s| s.0),
+        height: args.size.map(|s| s.1),
+        seed: args.seed,
+        threads: args.threads.map(|t| t as usize),
+        max_depth: args.max_depth,
+        ..Default::default()
+    };
+    let base = RenderSettings::merged(&[&scene.render, &cli]);
+    base.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let reference = match &args.reference {
+        Some(path) => {
+            let r = reference::load(path)?;
+            r.check_size(base.width, base.height)
+                .with_context(|| format!("{}", path.display()))?;
+            Some(r)
+        }
+        None => None,
+    };
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("cannot create {}", args.output.display()))?;
+    // One pool for every integrator, built before any clock starts.
+    let pool = build_pool(base.threads)?;
+    let cancel = AtomicBool::new(false);
+
+    let mut series = Vec::new();
+    for &integrator in &args.integrator {
+        let settings = RenderSettings {
+            integrator,
+            // Time, not a sample count, ends these renders.
+            spp: u32::MAX,
+            target_error: None,
+            ..base.clone()
+        };
+        let mut r = Renderer::with_pool(scene.clone(), settings, pool.clone())?;
+        let schedule = Schedule::log_spaced(FIRST_CHECKPOINT, PER_DECADE);
+        let s = convergence::run_series(
+            &mut r,
+            reference.as_ref(),
+            args.seconds,
+            schedule,
+            &cancel,
+            |c| {
+                if !args.quiet {
+                    let rmse = c.rmse.map(|e| format!("rmse {e:.5}  ")).unwrap_or_default();
+                    println!(
+                        "{:>6} {:8.3} s {:6} spp  {rmse}est. rmse {:.5}",
+                        integrator.name(),
+                        c.seconds,
+                        c.spp,
+                        c.est_rmse
+                    );
+                }
+            },
+        );
+        series.push(s);
+    }
+
+    let metric = if reference.is_some() {
+        Metric::Measured
+    } else {
+        Metric::Estimated
+    };
+    let fit_from = convergence::fit_start(args.seconds);
+
+    let mut csv = Vec::new();
+    convergence::write_csv(&mut csv, &series)?;
+    let csv_path = args.output.join("convergence.csv");
+    output::write_atomic(&csv_path, &csv)?;
+
+    let title = format!(
+        "{}, {}x{}: error against render time",
+        scene.name, base.width, base.height
+    );
+    let png = plot::convergence_png(&PlotSpec {
+        title: &title,
+        series: &series,
+        metric,
+        fit_from,
+    })?;
+    let png_path = args.output.join("convergence.png");
+    output::write_atomic(&png_path, &png)?;
+
+    let mut summary = summarise(
+        &scene.name,
+        &base,
+        pool.current_num_threads(),
+        scene.report.build_time.as_secs_f64(),
+        args,
+        &series,
+        metric,
+        fit_from,
+    );
+    let summary_path = args.output.join("summary.txt");
+    output::write_atomic(&summary_path, summary.as_bytes())?;
+    let _ = writeln!(
+        summary,
+        "wrote {}, {}, {}",
+        csv_path.display(),
+        png_path.display(),
+        summary_path.display()
+    );
+    Ok(ConvergeReport {
+        series,
+        metric,
+        fit_from,
+        summary,
+    })
+}
+
+/// The human-readable report: settings, each integrator's final error and fitted slopes, and the
+/// equal-time error ratios against the first integrator.
+#[allow(clippy::too_many_arguments)]
+fn summarise(
+    name: &str,
+    s: &RenderSettings,
+    threads: usize,
+    build_seconds: f64,
+    args: &ConvergeArgs,
+    series: &[Series],
+    metric: Metric,
+    fit_from: f64,
+) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{name}: {}x{}, seed {}, {threads} threads, {} s per integrator (scene build {:.3} ms, not counted)",
+        s.width,
+        s.height,
+        s.seed,
+        args.seconds,
+        build_seconds * 1e3
+    );
+    if let Some(r) = &args.reference {
+        let _ = writeln!(out, "reference: {}", r.display());
+    }
+    let _ = writeln!(
+        out,
+        "slopes: least squares of ln(error) on ln(time) over the checkpoints at t >= {fit_from:.2} s"
+    );
+    for ser in series {
+        let Some(last) = ser.points.last() else {
+            let _ = writeln!(out, "{}: no checkpoints (run too short)", ser.integrator);
+            continue;
+        };
+        let rmse = last
+            .rmse
+            .map(|e| format!("rmse {e:.5}, "))
+            .unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "{}: {} spp in {:.2} s ({:.2} M samples/s), {rmse}est. rmse {:.5}",
+            ser.integrator,
+            last.spp,
+            last.seconds,
+            last.samples_per_second / 1e6,
+            last.est_rmse
+        );
+        for m in [Metric::Measured, Metric::Estimated] {
+            if m == Metric::Measured && metric == Metric::Estimated {
+                continue;
+            }
+            if let Some(fit) = convergence::fit_series(ser, m, fit_from) {
+                let _ = writeln!(
+                    out,
+                    "  slope of {}: {:.3} ({} checkpoints from {:.2} s)",
+                    m.name(),
+                    fit.slope,
+                    fit.points,
+                    fit.from_seconds
+                );
+            }
+        }
+    }
+    if let Some((base, others)) = series.split_first() {
+        for other in others {
+            for m in [Metric::Measured, Metric::Estimated] {
+                if m == Metric::Measured && metric == Metric::Estimated {
+                    continue;
+                }
+                if let Some(ratio) = convergence::per_sample_ratio(base, other, m) {
+                    let _ = writeln!(
+                        out,
+                        "per sample: {} {n} * sqrt(spp) / {} {n} * sqrt(spp) = {ratio:.3} \
+                         (error ratio at equal samples per pixel: independent of speed and machine load)",
+                        other.integrator,
+                        base.integrator,
+                        n = m.name(),
+                    );
+                }
+                if let Some((t, ratio)) = convergence::equal_time_ratio(base, other, m) {
+                    let _ = writeln!(
+                        out,
+                        "equal time ({t:.2} s): {} {n} / {} {n} = {ratio:.3} \
+                         (at 1/sqrt(t), {} needs {:.1}x the time for {}'s error)",
+                        other.integrator,
+                        base.integrator,
+                        other.integrator,
+                        ratio * ratio,
+                        base.integrator,
+                        n = m.name(),
+                    );
+                }
+            }
+        }
+    }
+    out
+}
