@@ -23,19 +23,52 @@ const SOBOL_DIM1: [u32; 32] = {
     v
 };
 
-/// Sobol dimension 1 of point `index`.
-#[inline]
-fn sobol_dim1(mut index: u32) -> u32 {
-    let mut x = 0;
-    let mut k = 0;
-    while index != 0 {
-        if index & 1 != 0 {
-            x ^= SOBOL_DIM1[k];
+/// The same matrix applied a byte at a time: `SOBOL_DIM1_BYTES[b][x]` is the XOR of the
+/// direction numbers of the set bits of byte value x at byte position b. The shuffled indices
+/// are full 32-bit words, so a bit loop would take 32 steps; four lookups replace it.
+#[cfg(test)]
+const SOBOL_DIM1_BYTES: [[u32; 256]; 4] = byte_tables(false);
+
+/// The same with each direction number bit-reversed: yields reverse_bits(sobol_dim1(i)) directly,
+/// the form the Owen scramble works on.
+const SOBOL_DIM1_REV_BYTES: [[u32; 256]; 4] = byte_tables(true);
+
+const fn byte_tables(reversed: bool) -> [[u32; 256]; 4] {
+    let mut t = [[0u32; 256]; 4];
+    let mut b = 0;
+    while b < 4 {
+        let mut x = 0;
+        while x < 256 {
+            let mut acc = 0u32;
+            let mut bit = 0;
+            while bit < 8 {
+                if x & (1 << bit) != 0 {
+                    let v = SOBOL_DIM1[b * 8 + bit];
+                    acc ^= if reversed { v.reverse_bits() } else { v };
+                }
+                bit += 1;
+            }
+            t[b][x] = acc;
+            x += 1;
         }
-        index >>= 1;
-        k += 1;
+        b += 1;
     }
-    x
+    t
+}
+
+/// Sobol dimension 1 of point `index` (the sampler uses its bit-reversed form directly).
+#[cfg(test)]
+fn sobol_dim1(index: u32) -> u32 {
+    apply(&SOBOL_DIM1_BYTES, index)
+}
+
+#[inline]
+fn apply(tables: &[[u32; 256]; 4], index: u32) -> u32 {
+    let [b0, b1, b2, b3] = index.to_le_bytes();
+    tables[0][b0 as usize]
+        ^ tables[1][b1 as usize]
+        ^ tables[2][b2 as usize]
+        ^ tables[3][b3 as usize]
 }
 
 /// Burley's improved Laine-Karras hash: a permutation of 32-bit words in which each bit
@@ -60,7 +93,8 @@ pub fn owen_scramble(x: u32, seed: u32) -> u32 {
 #[derive(Clone, Debug)]
 pub struct PaddedSobol {
     pixel_seed: u64,
-    index: u32,
+    /// The sample index, bit-reversed once here instead of in every dimension's shuffle.
+    rev_index: u32,
 }
 
 const TO_UNIT: f64 = 1.0 / 4_294_967_296.0;
@@ -73,7 +107,7 @@ impl PaddedSobol {
         let replicate = sample & 1;
         PaddedSobol {
             pixel_seed: mix64(mix64(seed ^ 0x50b0_1c0d_e5ee_d000 ^ replicate) ^ pixel),
-            index: (sample >> 1) as u32,
+            rev_index: ((sample >> 1) as u32).reverse_bits(),
         }
     }
 
@@ -86,10 +120,14 @@ impl PaddedSobol {
     #[inline]
     pub fn get_2d(&self, dim: u32) -> (f64, f64) {
         let h = self.seeds(dim);
-        let shuffled = owen_scramble(self.index, h as u32);
+        // Nested uniform scramble of the index: owen_scramble(index), with the reversal hoisted.
+        let shuffled = laine_karras(self.rev_index, h as u32).reverse_bits();
         let h2 = mix64(h);
-        let x = owen_scramble(shuffled.reverse_bits(), h2 as u32);
-        let y = owen_scramble(sobol_dim1(shuffled), (h2 >> 32) as u32);
+        // owen_scramble(reverse(i)) = reverse(LK(i)): the van der Corput point, scrambled.
+        let x = laine_karras(shuffled, h2 as u32).reverse_bits();
+        // owen_scramble(sobol(i)) = reverse(LK(reverse(sobol(i)))), the inner reversal tabled.
+        let y =
+            laine_karras(apply(&SOBOL_DIM1_REV_BYTES, shuffled), (h2 >> 32) as u32).reverse_bits();
         (x as f64 * TO_UNIT, y as f64 * TO_UNIT)
     }
 
@@ -97,14 +135,29 @@ impl PaddedSobol {
     #[inline]
     pub fn get_1d(&self, dim: u32) -> f64 {
         let h = self.seeds(dim);
-        let shuffled = owen_scramble(self.index, h as u32);
-        owen_scramble(shuffled.reverse_bits(), (mix64(h) >> 32) as u32) as f64 * TO_UNIT
+        let shuffled = laine_karras(self.rev_index, h as u32).reverse_bits();
+        laine_karras(shuffled, (mix64(h) >> 32) as u32).reverse_bits() as f64 * TO_UNIT
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn byte_tables_match_the_bit_loop() {
+        let mut rng = crate::sampling::Rng::new(4);
+        for i in (0..1000u32).chain((0..1000).map(|_| rng.next_u64() as u32)) {
+            let mut x = 0;
+            for (k, v) in SOBOL_DIM1.iter().enumerate() {
+                if i >> k & 1 != 0 {
+                    x ^= v;
+                }
+            }
+            assert_eq!(sobol_dim1(i), x);
+            assert_eq!(apply(&SOBOL_DIM1_REV_BYTES, i), x.reverse_bits());
+        }
+    }
 
     /// The unscrambled first two dimensions are a (0, 2)-sequence: every block of 2^m points
     /// puts exactly one point in each elementary interval of area 2^-m.
@@ -122,6 +175,22 @@ mod tests {
                     assert!(!seen[cell], "m={m} shape={shape}: two points in one cell");
                     seen[cell] = true;
                 }
+            }
+        }
+    }
+
+    /// The hoisted reversals compute exactly Burley's formulation.
+    #[test]
+    fn fast_path_equals_the_textbook_formulation() {
+        for sample in 0..300u64 {
+            let p = PaddedSobol::new(5, 17, sample);
+            for dim in 1..6 {
+                let h = p.seeds(dim);
+                let shuffled = owen_scramble((sample >> 1) as u32, h as u32);
+                let h2 = mix64(h);
+                let x = owen_scramble(shuffled.reverse_bits(), h2 as u32);
+                let y = owen_scramble(sobol_dim1(shuffled), (h2 >> 32) as u32);
+                assert_eq!(p.get_2d(dim), (x as f64 * TO_UNIT, y as f64 * TO_UNIT));
             }
         }
     }
