@@ -95,6 +95,9 @@ impl Default for RenderSettings {
 /// Largest width or height accepted; the film's memory is checked separately.
 pub const MAX_DIMENSION: u32 = 1 << 15;
 
+/// Most worker threads accepted from any layer (scene file, CLI, TUI).
+pub const MAX_THREADS: usize = 1024;
+
 /// Bytes of render state per pixel (film sums, counts, snapshot); see `film`.
 pub const BYTES_PER_PIXEL: u64 = 64;
 
@@ -118,6 +121,7 @@ pub struct SettingsOverrides {
     )]
     pub exposure: Option<f64>,
     pub tonemap: Option<Tonemap>,
+    #[serde(default, deserialize_with = "crate::scene::description::de_threads")]
     pub threads: Option<usize>,
 }
 
@@ -151,12 +155,21 @@ impl RenderSettings {
                 ));
             }
         }
+        if self.threads > MAX_THREADS {
+            return Err(format!(
+                "threads must be between 0 (one per core) and {MAX_THREADS}, got {}",
+                self.threads
+            ));
+        }
         if self.spp == 0 {
             return Err("spp must be at least 1".into());
         }
-        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+        // The tonemapper works in f32: keep exposure well inside its range.
+        let max = crate::scene::description::MAX_MAGNITUDE;
+        if !(self.exposure >= 1.0 / max && self.exposure <= max) {
             return Err(format!(
-                "exposure must be a finite number > 0, got {}",
+                "exposure must be a number between {:e} and {max:e}, got {}",
+                1.0 / max,
                 self.exposure
             ));
         }

@@ -1,5 +1,6 @@
 //! The command line: clap definitions and one module per subcommand. `main.rs` only dispatches.
 
+pub mod check;
 pub mod render;
 
 use crate::settings::{IntegratorKind, SettingsOverrides, Tonemap};
@@ -27,6 +28,9 @@ pub enum Command {
     Render(RenderArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Render scenes briefly and test them against their `[check]` expectations (default: all of
+    /// scenes/extreme/).
+    Check(check::CheckArgs),
 }
 
 #[derive(Args, Debug)]
