@@ -165,11 +165,10 @@ impl RenderSettings {
             return Err("spp must be at least 1".into());
         }
         // The tonemapper works in f32: keep exposure well inside its range.
-        let max = crate::scene::description::MAX_MAGNITUDE;
-        if !(self.exposure >= 1.0 / max && self.exposure <= max) {
+        use crate::scene::description::{MAX_MAGNITUDE as MAX, MIN_MAGNITUDE as MIN};
+        if !(MIN..=MAX).contains(&self.exposure) {
             return Err(format!(
-                "exposure must be a number between {:e} and {max:e}, got {}",
-                1.0 / max,
+                "exposure must be a number between {MIN:e} and {MAX:e}, got {}",
                 self.exposure
             ));
         }

@@ -92,6 +92,8 @@ impl SphereDesc {
 /// would only turn into inf or NaN inside the renderer. The smallest positive value accepted is
 /// its inverse, so squares of radii (1e-60) never underflow to zero.
 pub const MAX_MAGNITUDE: f64 = 1e30;
+/// Smallest positive length (radius) and direction length accepted: 1 / [`MAX_MAGNITUDE`].
+pub const MIN_MAGNITUDE: f64 = 1e-30;
 
 /// Index of refraction range: every transparent material (diamond 2.42, germanium 4.0) and its
 /// inverse fit, and the radiance scaling eta^2 of one refraction stays at most 100.
@@ -113,7 +115,7 @@ pub struct Rgb(pub [f64; 3]);
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Albedo(pub [f64; 3]);
 
-/// A number in [1 / MAX_MAGNITUDE, MAX_MAGNITUDE].
+/// A number in [MIN_MAGNITUDE, MAX_MAGNITUDE].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Positive(pub f64);
 
@@ -219,10 +221,9 @@ impl<'de> Deserialize<'de> for Dir {
         }
         // Normalising squares the components: a length below 1/MAX_MAGNITUDE would underflow.
         let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if len < 1.0 / MAX_MAGNITUDE {
+        if len < MIN_MAGNITUDE {
             return Err(de::Error::custom(format!(
-                "direction is too short to normalise (length {len:e}, need at least {:e})",
-                1.0 / MAX_MAGNITUDE
+                "direction is too short to normalise (length {len:e}, need at least {MIN_MAGNITUDE:e})"
             )));
         }
         Ok(Dir(v))
@@ -264,10 +265,9 @@ impl<'de> Deserialize<'de> for Positive {
         let v = finite(f64::deserialize(d)?).map_err(de::Error::custom)?;
         if v <= 0.0 {
             Err(de::Error::custom(format!("must be > 0, got {v}")))
-        } else if v < 1.0 / MAX_MAGNITUDE {
+        } else if v < MIN_MAGNITUDE {
             Err(de::Error::custom(format!(
-                "must be at least {:e} (its square would underflow), got {v:e}",
-                1.0 / MAX_MAGNITUDE
+                "must be at least {MIN_MAGNITUDE:e} (its square would underflow), got {v:e}"
             )))
         } else {
             Ok(Positive(v))

@@ -56,7 +56,12 @@ pub fn parse(src: &str, file: &str) -> Result<SceneDesc, SceneError> {
     let de = toml::Deserializer::parse(src)
         .map_err(|e| SceneError::at(file, src, e.span(), None, e.message()))?;
     serde_path_to_error::deserialize(de).map_err(|e| {
-        let path = e.path().to_string();
+        // `toml::Spanned` fields deserialise through a private inner key: keep it out of the
+        // field path users see (`camera.up`, not `camera.up.$__serde_spanned_private_value`).
+        let path = e
+            .path()
+            .to_string()
+            .replace(".$__serde_spanned_private_value", "");
         let inner = e.into_inner();
         SceneError::at(file, src, inner.span(), Some(path), inner.message())
     })
