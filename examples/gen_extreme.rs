@@ -277,7 +277,7 @@ fn probes() -> Vec<(String, String)> {
                 .to_toml("probe", &check(format!("translate {t:e}"))),
         ));
     }
-    for k in [1e-6, 1e6, 1e-9, 1e9, 1e-12, 1e12, 1e-15, 1e15, 1e-20, 1e20] {
+    for k in [1e-6, 1e6, 1e-9, 1e9, 1e-12, 1e12, 1e-15, 1e15, 1e-20, 1e20, 1e-25, 1e24] {
         out.push((
             format!("scale-{k:e}"),
             load("cornell")
@@ -293,7 +293,7 @@ fn probes() -> Vec<(String, String)> {
                 .to_toml("probe", &check(format!("walls {r:e}"))),
         ));
     }
-    for r in [1e-6, 1e-8] {
+    for r in [1e-6, 1e-8, 1e-10, 1e-12, 1e-13] {
         out.push((
             format!("small-light-{r:e}"),
             load("cornell-small-light").light_radius(r).to_toml(

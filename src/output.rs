@@ -110,7 +110,7 @@ pub fn save_film(path: &Path, film: &Film, exposure: f64, op: Tonemap) -> Result
 
 /// Write bytes to `path` through a temporary file in the same directory and a rename.
 pub fn write_atomic(path: &Path, data: &[u8]) -> Result<(), OutputError> {
-    write_atomic_with(path, data, |f, data| write_all_to(f, data))
+    write_atomic_with(path, data, write_all_to)
 }
 
 /// [`write_atomic`] with the step that writes the temporary file given, so a failing device (a

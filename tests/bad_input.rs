@@ -145,8 +145,7 @@ fn a_film_larger_than_memory_is_an_error_of_the_scene_file() {
     match available_memory() {
         Some(avail) if avail < need => {
             let err = load_str(&src, "bad.toml")
-                .err()
-                .expect("rejected")
+                .expect_err("rejected")
                 .to_string();
             assert!(
                 err.starts_with(&format!("bad.toml:{}:", marked_line(&src)))

@@ -27,7 +27,7 @@ pub fn russian_roulette(beta: &mut DVec3, depth: u32, u: f64) -> bool {
         return true;
     }
     let q = max_component(*beta).min(MAX_SURVIVAL);
-    if !(q > 0.0) || u >= q {
+    if q.is_nan() || q <= 0.0 || u >= q {
         return false;
     }
     *beta /= q;
