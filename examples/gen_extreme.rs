@@ -277,7 +277,9 @@ fn probes() -> Vec<(String, String)> {
                 .to_toml("probe", &check(format!("translate {t:e}"))),
         ));
     }
-    for k in [1e-6, 1e6, 1e-9, 1e9, 1e-12, 1e12, 1e-15, 1e15, 1e-20, 1e20, 1e-25, 1e24] {
+    for k in [
+        1e-6, 1e6, 1e-9, 1e9, 1e-12, 1e12, 1e-15, 1e15, 1e-20, 1e20, 1e-25, 1e24,
+    ] {
         out.push((
             format!("scale-{k:e}"),
             load("cornell")

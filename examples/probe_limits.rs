@@ -55,7 +55,10 @@ fn main() {
         }
         println!(
             "{:<28} {:>+12.3e} {:>11.1}% {:>12.4} {:>12.4}",
-            std::path::Path::new(&path).file_stem().unwrap().to_string_lossy(),
+            std::path::Path::new(&path)
+                .file_stem()
+                .unwrap()
+                .to_string_lossy(),
             sa / sb - 1.0,
             100.0 * diverged as f64 / a.pixels() as f64,
             mb,

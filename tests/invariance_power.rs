@@ -42,26 +42,12 @@ fn a_mirror_made_diffuse_is_rejected() {
     assert!(!o.passed(), "diffuse mirror accepted: {:?}", o.verdicts);
 }
 
-/// The index-matched sphere given an index of 1.5 refracts the room behind it. At the 256 spp of
-/// the invariance check the difference is within the noise of glass paths (max|z| 4.8 against
-/// 4.9, measured); at 1024 spp the per-pixel test rejects it (max|z| 9.5, measured).
+/// The index-matched sphere given an index of 1.5 refracts the room behind it: many pixels change
+/// moderately, none enough alone (max|z| 4.8 against 5.0, measured), so the chi-square test is
+/// the one that rejects it (3.9 against 3.06, measured).
 #[test]
-fn index_matched_glass_made_visible_is_rejected_at_1024_spp() {
-    let text = only(
-        check::extreme::get("index-matched").unwrap(),
-        "ior = 1.0",
-        "ior = 1.5",
-    );
-    let source = Source {
-        name: "index-matched, ior 1.5".into(),
-        text: Cow::Owned(text),
-        dir: None,
-    };
-    let options = Options {
-        spp: Some(1024),
-        ..Options::default()
-    };
-    let o = check::run(&source, &options).unwrap();
+fn index_matched_glass_made_visible_is_rejected() {
+    let o = check_variant("index-matched", |t| only(t, "ior = 1.0", "ior = 1.5"));
     eprintln!("{:?}", o.verdicts);
     assert!(!o.passed(), "visible glass accepted: {:?}", o.verdicts);
 }

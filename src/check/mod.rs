@@ -223,11 +223,14 @@ pub fn run(source: &Source, options: &Options) -> Result<Outcome, CheckError> {
         let c = stats::compare(&film, &ref_film);
         verdicts.push(Verdict {
             what: format!(
-                "same as {reference}: max|z| {:.2} (limit {:.2}), mean |z| {:.2} (limit {:.2})",
+                "same as {reference}: max|z| {:.2} (limit {:.2}), mean |z| {:.2} (limit {:.2}), \
+                 chi2 z {:.2} (limit {:.2})",
                 c.max_abs_z,
                 c.pixel_limit,
                 c.max_mean_z(),
-                c.mean_limit
+                c.mean_limit,
+                c.max_chi2_z(),
+                c.chi2_limit
             ),
             passed: c.passed(),
         });
