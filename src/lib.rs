@@ -9,6 +9,7 @@
 
 pub mod accel;
 pub mod camera;
+pub mod check;
 pub mod cli;
 pub mod convergence;
 pub mod error_map;

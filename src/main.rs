@@ -7,6 +7,7 @@ fn main() {
     let result = match &cli.command {
         Some(Command::Render(args)) => cli::render::run(args),
         Some(Command::Converge(args)) => cli::converge::run(args),
+        Some(Command::Check(args)) => cli::check::run(args),
         Some(Command::Scenes) => {
             for name in builtin::names() {
                 println!("{name}");

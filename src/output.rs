@@ -110,28 +110,25 @@ pub fn save_film(path: &Path, film: &Film, exposure: f64, op: Tonemap) -> Result
 
 /// Write bytes to `path` through a temporary file in the same directory and a rename.
 pub fn write_atomic(path: &Path, data: &[u8]) -> Result<(), OutputError> {
+    write_atomic_with(path, data, write_all_to)
+}
+
+/// [`write_atomic`] with the step that writes the temporary file given, so a failing device (a
+/// full disk) can be simulated: whatever `write` does, the target is replaced whole or not at all,
+/// and the temporary file does not outlive a failure.
+pub fn write_atomic_with(
+    path: &Path,
+    data: &[u8],
+    write: impl FnOnce(&mut std::fs::File, &[u8]) -> std::io::Result<()>,
+) -> Result<(), OutputError> {
     let io = |source| OutputError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().ok_or_else(|| {
-        io(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "not a file name",
-        ))
-    })?;
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    let tmp = temp_path(path).map_err(io)?;
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
-        write_all_to(&mut f, data)?;
+        write(&mut f, data)?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
@@ -139,6 +136,39 @@ pub fn write_atomic(path: &Path, data: &[u8]) -> Result<(), OutputError> {
         let _ = std::fs::remove_file(&tmp);
     }
     result.map_err(io)
+}
+
+/// The temporary file beside `path` that a save writes before renaming it into place.
+fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name"))?;
+    Ok(dir.join(format!(
+        ".{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    )))
+}
+
+/// Fail before a long render, not after it, if `path` cannot be saved: its format must be known,
+/// it must not be a directory, and its directory must accept a new file (probed by creating and
+/// removing the temporary file a save would use; the target itself is not touched).
+pub fn check_writable(path: &Path) -> Result<(), OutputError> {
+    encode(path, 1, 1, &[0.0; 3], 1.0, Tonemap::Clamp)?;
+    let io = |source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    if path.is_dir() {
+        return Err(io(std::io::Error::other("is a directory")));
+    }
+    let tmp = temp_path(path).map_err(io)?;
+    std::fs::File::create(&tmp).map_err(io)?;
+    std::fs::remove_file(&tmp).map_err(io)
 }
 
 /// Write everything or fail; separate so a failing writer (full disk) can be tested.

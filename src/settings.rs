@@ -111,6 +111,9 @@ impl Default for RenderSettings {
 /// Largest width or height accepted; the film's memory is checked separately.
 pub const MAX_DIMENSION: u32 = 1 << 15;
 
+/// Most worker threads accepted from any layer (scene file, CLI, TUI).
+pub const MAX_THREADS: usize = 1024;
+
 /// Bytes of render state per pixel (film sums, counts, snapshot); see `film`.
 pub const BYTES_PER_PIXEL: u64 = 64;
 
@@ -134,6 +137,7 @@ pub struct SettingsOverrides {
     )]
     pub exposure: Option<f64>,
     pub tonemap: Option<Tonemap>,
+    #[serde(default, deserialize_with = "crate::scene::description::de_threads")]
     pub threads: Option<usize>,
     /// The `[render.painterly]` table.
     #[serde(default)]
@@ -179,12 +183,20 @@ impl RenderSettings {
                 ));
             }
         }
+        if self.threads > MAX_THREADS {
+            return Err(format!(
+                "threads must be between 0 (one per core) and {MAX_THREADS}, got {}",
+                self.threads
+            ));
+        }
         if self.spp == 0 {
             return Err("spp must be at least 1".into());
         }
-        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+        // The tonemapper works in f32: keep exposure well inside its range.
+        use crate::scene::description::{MAX_MAGNITUDE as MAX, MIN_MAGNITUDE as MIN};
+        if !(MIN..=MAX).contains(&self.exposure) {
             return Err(format!(
-                "exposure must be a finite number > 0, got {}",
+                "exposure must be a number between {MIN:e} and {MAX:e}, got {}",
                 self.exposure
             ));
         }

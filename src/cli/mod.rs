@@ -1,5 +1,6 @@
 //! The command line: clap definitions and one module per subcommand. `main.rs` only dispatches.
 
+pub mod check;
 pub mod converge;
 pub mod render;
 
@@ -32,6 +33,9 @@ pub enum Command {
     Converge(converge::ConvergeArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Render scenes briefly and test them against their `[check]` expectations (default: all of
+    /// scenes/extreme/).
+    Check(check::CheckArgs),
 }
 
 #[derive(Args, Debug)]

@@ -16,7 +16,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let scene = Arc::new(scene::load(spec)?);
     let settings = RenderSettings::merged(&[&scene.render, &args.settings.overrides()]);
     // Fail on a bad output path before spending minutes rendering.
-    output::encode(&args.output, 1, 1, &[0.0; 3], 1.0, settings.tonemap)?;
+    output::check_writable(&args.output)?;
     if let Some(path) = &args.error_map {
         error_map::check_format(path)?;
         if settings.spp < 2 {

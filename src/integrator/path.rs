@@ -8,7 +8,7 @@
 //! the emission counts in full.
 
 use super::russian_roulette;
-use crate::geometry::spawn_origin;
+use crate::geometry::{spawn_origin, Hit};
 use crate::math::{DVec3, Ray};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
@@ -55,7 +55,7 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
                     // Visible if the first thing along the shadow ray is the sampled light
                     // itself: no distance tolerance, so light cannot leak where a light sphere
                     // grazes a wall (smallpt's ceiling).
-                    let shadow = Ray::new(spawn_origin(hit.p, hit.n, hit.err, ls.wi), ls.wi);
+                    let shadow = shadow_ray(scene, &hit, ls.wi, ls.prim);
                     if scene
                         .intersect(&shadow, f64::INFINITY)
                         .is_some_and(|h| h.prim == ls.prim)
@@ -87,4 +87,24 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
     }
     l
+}
+
+/// The shadow ray of a light sample: from the offset origin towards the point on the light that
+/// the sampled direction `wi` (chosen from the hit point itself) reaches. Sending it along `wi`
+/// from the offset origin instead would shift it sideways by up to the offset (4 err, 1.4e-9 on
+/// smallpt's radius-1e5 walls), and a light that small misses: with radius 1e-8 a measured 5% of
+/// the light was lost. Falls back to `wi` when the aim cannot be recomputed (a light sampled from
+/// its own surface, or a direction that rounds past the light's rim).
+#[inline]
+fn shadow_ray(scene: &Scene, hit: &Hit, wi: DVec3, light_prim: u32) -> Ray {
+    let o = spawn_origin(hit.p, hit.n, hit.err, wi);
+    let shape = &scene.prims[light_prim as usize].shape;
+    if let Some(t) = shape.intersect(&Ray::new(hit.p, wi), f64::INFINITY) {
+        let d = (hit.p + wi * t - o).normalize_or_zero();
+        // Same side of the surface as wi, so the origin's offset still points the right way.
+        if d.dot(hit.n) * wi.dot(hit.n) > 0.0 {
+            return Ray::new(o, d);
+        }
+    }
+    Ray::new(o, wi)
 }

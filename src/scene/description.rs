@@ -13,7 +13,7 @@
 //! color = [0.75, 0.25, 0.25]
 //! ```
 
-use crate::settings::{SettingsOverrides, MAX_DIMENSION};
+use crate::settings::{SettingsOverrides, MAX_DIMENSION, MAX_THREADS};
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::Deserialize;
 use std::fmt;
@@ -29,6 +29,8 @@ pub struct SceneDesc {
     pub background: Option<Rgb>,
     #[serde(default)]
     pub sphere: Vec<SphereDesc>,
+    /// What `ptui check` expects of this scene (see `crate::check`); ignored by rendering.
+    pub check: Option<crate::check::CheckDesc>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -58,7 +60,7 @@ pub struct MaterialDesc {
     pub material: Option<MaterialName>,
     pub color: Option<Albedo>,
     pub emission: Option<Rgb>,
-    pub ior: Option<Spanned<Positive>>,
+    pub ior: Option<Spanned<Ior>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -70,7 +72,7 @@ pub struct SphereDesc {
     pub material: Option<MaterialName>,
     pub color: Option<Albedo>,
     pub emission: Option<Rgb>,
-    pub ior: Option<Spanned<Positive>>,
+    pub ior: Option<Spanned<Ior>>,
 }
 
 impl SphereDesc {
@@ -83,6 +85,19 @@ impl SphereDesc {
         }
     }
 }
+
+/// Largest magnitude accepted for a coordinate, a length or a radiance. Products of two such
+/// values (squared distances, area times emission) stay near 1e60, far from f64 overflow
+/// (1.8e308) even after a path's throughput grows; larger numbers mean nothing in a scene and
+/// would only turn into inf or NaN inside the renderer. The smallest positive value accepted is
+/// its inverse, so squares of radii (1e-60) never underflow to zero.
+pub const MAX_MAGNITUDE: f64 = 1e30;
+/// Smallest positive length (radius) and direction length accepted: 1 / [`MAX_MAGNITUDE`].
+pub const MIN_MAGNITUDE: f64 = 1e-30;
+
+/// Index of refraction range: every transparent material (diamond 2.42, germanium 4.0) and its
+/// inverse fit, and the radiance scaling eta^2 of one refraction stays at most 100.
+pub const IOR_RANGE: (f64, f64) = (0.1, 10.0);
 
 /// A finite 3-vector.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -100,9 +115,13 @@ pub struct Rgb(pub [f64; 3]);
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Albedo(pub [f64; 3]);
 
-/// A finite number > 0.
+/// A number in [MIN_MAGNITUDE, MAX_MAGNITUDE].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Positive(pub f64);
+
+/// An index of refraction within [`IOR_RANGE`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ior(pub f64);
 
 /// A finite number >= 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,10 +132,14 @@ pub struct NonNegative(pub f64);
 pub struct Fov(pub f64);
 
 fn finite(v: f64) -> Result<f64, String> {
-    if v.is_finite() {
-        Ok(v)
-    } else {
+    if !v.is_finite() {
         Err(format!("must be a finite number, got {v}"))
+    } else if v.abs() > MAX_MAGNITUDE {
+        Err(format!(
+            "magnitude must be at most {MAX_MAGNITUDE:e} (larger values overflow), got {v:e}"
+        ))
+    } else {
+        Ok(v)
     }
 }
 
@@ -196,6 +219,13 @@ impl<'de> Deserialize<'de> for Dir {
         if v.iter().all(|x| *x == 0.0) {
             return Err(de::Error::custom("direction must not be the zero vector"));
         }
+        // Normalising squares the components: a length below 1/MAX_MAGNITUDE would underflow.
+        let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if len < MIN_MAGNITUDE {
+            return Err(de::Error::custom(format!(
+                "direction is too short to normalise (length {len:e}, need at least {MIN_MAGNITUDE:e})"
+            )));
+        }
         Ok(Dir(v))
     }
 }
@@ -233,10 +263,28 @@ impl<'de> Deserialize<'de> for Albedo {
 impl<'de> Deserialize<'de> for Positive {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let v = finite(f64::deserialize(d)?).map_err(de::Error::custom)?;
-        if v > 0.0 {
-            Ok(Positive(v))
-        } else {
+        if v <= 0.0 {
             Err(de::Error::custom(format!("must be > 0, got {v}")))
+        } else if v < MIN_MAGNITUDE {
+            Err(de::Error::custom(format!(
+                "must be at least {MIN_MAGNITUDE:e} (its square would underflow), got {v:e}"
+            )))
+        } else {
+            Ok(Positive(v))
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Ior {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = finite(f64::deserialize(d)?).map_err(de::Error::custom)?;
+        let (lo, hi) = IOR_RANGE;
+        if (lo..=hi).contains(&v) {
+            Ok(Ior(v))
+        } else {
+            Err(de::Error::custom(format!(
+                "index of refraction must be between {lo} and {hi}, got {v}"
+            )))
         }
     }
 }
@@ -284,6 +332,18 @@ pub fn de_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error
         Ok(Some(v as u32))
     } else {
         Err(de::Error::custom(format!("must be at least 1, got {v}")))
+    }
+}
+
+/// `threads`: 0 (one per core) up to 1024, like the CLI's `--threads`.
+pub fn de_threads<'de, D: Deserializer<'de>>(d: D) -> Result<Option<usize>, D::Error> {
+    let v = i64::deserialize(d)?;
+    if (0..=MAX_THREADS as i64).contains(&v) {
+        Ok(Some(v as usize))
+    } else {
+        Err(de::Error::custom(format!(
+            "must be between 0 (one per core) and {MAX_THREADS}, got {v}"
+        )))
     }
 }
 

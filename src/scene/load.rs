@@ -9,6 +9,7 @@ use crate::geometry::Sphere;
 use crate::light::{sphere::SphereLight, Light, Lights};
 use crate::material::{Material, MaterialKind};
 use crate::math::DVec3;
+use crate::settings::RenderSettings;
 use std::collections::HashMap;
 use std::path::Path;
 use std::time::Instant;
@@ -55,7 +56,12 @@ pub fn parse(src: &str, file: &str) -> Result<SceneDesc, SceneError> {
     let de = toml::Deserializer::parse(src)
         .map_err(|e| SceneError::at(file, src, e.span(), None, e.message()))?;
     serde_path_to_error::deserialize(de).map_err(|e| {
-        let path = e.path().to_string();
+        // `toml::Spanned` fields deserialise through a private inner key: keep it out of the
+        // field path users see (`camera.up`, not `camera.up.$__serde_spanned_private_value`).
+        let path = e
+            .path()
+            .to_string()
+            .replace(".$__serde_spanned_private_value", "");
         let inner = e.into_inner();
         SceneError::at(file, src, inner.span(), Some(path), inner.message())
     })
@@ -63,6 +69,7 @@ pub fn parse(src: &str, file: &str) -> Result<SceneDesc, SceneError> {
 
 fn build(desc: &SceneDesc, src: &str, file: &str) -> Result<Scene, SceneError> {
     let started = Instant::now();
+    check_render_size(desc, src, file)?;
     let camera = build_camera(desc, src, file)?;
 
     let mut names: HashMap<&str, ()> = HashMap::new();
@@ -129,6 +136,38 @@ fn build(desc: &SceneDesc, src: &str, file: &str) -> Result<Scene, SceneError> {
     })
 }
 
+/// A `[render]` size whose film cannot fit in the available memory is an error of the scene file,
+/// reported at its `width` (or `height`) with the memory it would need. Every other setting was
+/// range-checked as it was read.
+fn check_render_size(desc: &SceneDesc, src: &str, file: &str) -> Result<(), SceneError> {
+    let r = &desc.render;
+    if r.width.is_none() && r.height.is_none() {
+        return Ok(());
+    }
+    let Err(message) = RenderSettings::merged(&[r]).validate() else {
+        return Ok(());
+    };
+    let key = if r.width.is_some() { "width" } else { "height" };
+    Err(SceneError::at(
+        file,
+        src,
+        value_span(src, &["render", key]),
+        Some(format!("render.{key}")),
+        message,
+    ))
+}
+
+/// Byte span of the value at a key path (`["render", "width"]`) in TOML text.
+fn value_span(src: &str, path: &[&str]) -> Option<std::ops::Range<usize>> {
+    let doc = toml::de::DeTable::parse(src).ok()?;
+    let (last, parents) = path.split_last()?;
+    let mut table = doc.get_ref();
+    for key in parents {
+        table = table.get(*key)?.get_ref().as_table()?;
+    }
+    Some(table.get(*last)?.span())
+}
+
 fn build_camera(desc: &SceneDesc, src: &str, file: &str) -> Result<Camera, SceneError> {
     let c = &desc.camera;
     let position = c.position.map_or(DVec3::ZERO, |p| DVec3::from_array(p.0));
@@ -145,7 +184,8 @@ fn build_camera(desc: &SceneDesc, src: &str, file: &str) -> Result<Camera, Scene
         (Some(d), None) => DVec3::from_array(d.get_ref().0),
         (None, Some(target)) => {
             let d = DVec3::from_array(target.get_ref().0) - position;
-            if d.length_squared() == 0.0 {
+            // Not just d == 0: a difference so small its square underflows cannot be normalised.
+            if d.try_normalize().is_none() {
                 return Err(SceneError::at(
                     file,
                     src,
