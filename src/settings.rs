@@ -73,6 +73,8 @@ pub struct RenderSettings {
     pub tonemap: Tonemap,
     /// Worker threads; 0 means one per core.
     pub threads: usize,
+    /// Stop once the estimated relative error (`ErrorEstimate::relative`) is at most this.
+    pub target_error: Option<f64>,
 }
 
 impl Default for RenderSettings {
@@ -88,6 +90,7 @@ impl Default for RenderSettings {
             exposure: 1.0,
             tonemap: Tonemap::Clamp,
             threads: 0,
+            target_error: None,
         }
     }
 }
@@ -119,6 +122,11 @@ pub struct SettingsOverrides {
     pub exposure: Option<f64>,
     pub tonemap: Option<Tonemap>,
     pub threads: Option<usize>,
+    #[serde(
+        default,
+        deserialize_with = "crate::scene::description::de_positive_opt"
+    )]
+    pub target_error: Option<f64>,
 }
 
 impl RenderSettings {
@@ -130,6 +138,9 @@ impl RenderSettings {
         take!(width, height, spp, seed, integrator, sampler, exposure, tonemap, threads);
         if let Some(d) = o.max_depth {
             self.max_depth = Some(d);
+        }
+        if let Some(e) = o.target_error {
+            self.target_error = Some(e);
         }
     }
 

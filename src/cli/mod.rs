@@ -1,6 +1,7 @@
 //! The command line: clap definitions and one module per subcommand. `main.rs` only dispatches.
 
 pub mod render;
+pub mod tui;
 
 use crate::settings::{IntegratorKind, SettingsOverrides, Tonemap};
 use clap::{Args, Parser, Subcommand};
@@ -19,6 +20,8 @@ pub struct Cli {
     pub scene: Option<String>,
     #[command(flatten)]
     pub settings: SettingsArgs,
+    #[command(flatten)]
+    pub tui: tui::TuiArgs,
 }
 
 #[derive(Subcommand, Debug)]
