@@ -139,7 +139,10 @@ fn tui_renders_changes_spp_saves_and_restores_the_terminal() {
     let screen = tmux.wait_for("the render to finish at the new spp", 120, |s| {
         gauge(s).is_some_and(|(done, target)| target == 2 && done >= 2) && s.contains(" done")
     });
-    assert!(screen.contains("spp        2"), "form shows the new spp:\n{screen}");
+    assert!(
+        screen.contains("spp        2"),
+        "form shows the new spp:\n{screen}"
+    );
 
     tmux.keys(&["s"]);
     let screen = tmux.wait_for("the save", 120, |s| s.contains("saved "));
@@ -154,7 +157,11 @@ fn tui_renders_changes_spp_saves_and_restores_the_terminal() {
         "{name}"
     );
     let png = image::open(dir.join(name)).expect("the saved PNG opens");
-    assert_eq!((png.width(), png.height()), (64, 48), "full film resolution");
+    assert_eq!(
+        (png.width(), png.height()),
+        (64, 48),
+        "full film resolution"
+    );
 
     tmux.keys(&["q"]);
     assert!(
@@ -170,7 +177,11 @@ fn tui_renders_changes_spp_saves_and_restores_the_terminal() {
     for mode in ["icanon", "echo", "isig"] {
         assert!(modes.contains(&mode), "{mode} not restored: {stty}");
     }
-    assert_eq!(tmux.display("#{alternate_on}"), "0", "left the alternate screen");
+    assert_eq!(
+        tmux.display("#{alternate_on}"),
+        "0",
+        "left the alternate screen"
+    );
     assert_eq!(tmux.display("#{cursor_flag}"), "1", "cursor visible again");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -134,8 +134,14 @@ impl App {
             return;
         };
         let s = self.settings();
-        self.preview
-            .update(&snap, area, &self.view, self.halfblock, s.exposure, s.tonemap);
+        self.preview.update(
+            &snap,
+            area,
+            &self.view,
+            self.halfblock,
+            s.exposure,
+            s.tonemap,
+        );
     }
 
     /// Apply the newest snapshot received since the last frame, if any.
@@ -181,10 +187,13 @@ impl App {
                 }
                 let t = snap.stats.elapsed.as_secs_f64();
                 let rmse = snap.error.rmse;
-                if rmse.is_finite() && rmse > 0.0 && t > 0.0 {
-                    if self.history.last().is_none_or(|&(t0, _)| t > t0) {
-                        self.history.push((t, rmse));
-                    }
+                // Points 2% apart in time: evenly spread on the log axis, a few hundred per hour.
+                if rmse.is_finite()
+                    && rmse > 0.0
+                    && t > 0.0
+                    && self.history.last().is_none_or(|&(t0, _)| t >= t0 * 1.02)
+                {
+                    self.history.push((t, rmse));
                 }
                 // The first snapshot of a render is applied at once (so a tiny render that
                 // finishes between two frames still shows); later ones wait for the next frame.
@@ -306,9 +315,7 @@ impl App {
     }
 
     fn on_edit_key(&mut self, key: KeyEvent, ctrl: bool) -> Option<Action> {
-        let Some(text) = self.form.editing.as_mut() else {
-            return None;
-        };
+        let text = self.form.editing.as_mut()?;
         match key.code {
             KeyCode::Esc => self.form.editing = None,
             KeyCode::Enter => {

@@ -150,7 +150,11 @@ pub fn ansi256_rgb(i: u8) -> [u8; 3] {
     match i {
         16..=231 => {
             let k = i - 16;
-            [CUBE[(k / 36) as usize], CUBE[(k / 6 % 6) as usize], CUBE[(k % 6) as usize]]
+            [
+                CUBE[(k / 36) as usize],
+                CUBE[(k / 6 % 6) as usize],
+                CUBE[(k % 6) as usize],
+            ]
         }
         232..=255 => [8 + 10 * (i - 232); 3],
         _ => [0; 3],
@@ -163,7 +167,10 @@ mod tests {
 
     #[test]
     fn auto_detection_order() {
-        assert_eq!(detect(Some("truecolor"), Some("xterm")), ColorMode::Truecolor);
+        assert_eq!(
+            detect(Some("truecolor"), Some("xterm")),
+            ColorMode::Truecolor
+        );
         assert_eq!(detect(Some("24bit"), None), ColorMode::Truecolor);
         assert_eq!(detect(None, Some("xterm-direct")), ColorMode::Truecolor);
         assert_eq!(detect(None, Some("tmux-256color")), ColorMode::Ansi256);
@@ -203,7 +210,10 @@ mod tests {
                 }
                 let mean = sum / 16.0;
                 let step = if c[1] == 0 { 95.0 } else { 17.0 };
-                assert!((mean - v as f64).abs() <= step / 16.0 + 0.5, "{c:?}: {mean}");
+                assert!(
+                    (mean - v as f64).abs() <= step / 16.0 + 0.5,
+                    "{c:?}: {mean}"
+                );
             }
         }
     }

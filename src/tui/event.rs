@@ -7,6 +7,8 @@ use std::path::PathBuf;
 use std::sync::mpsc::Sender;
 use std::time::{Duration, Instant};
 
+// Events are few (keys, ~10 snapshots a second): their size does not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
 pub enum Event {
     /// A key press, with the moment it was read (for latency measurement).

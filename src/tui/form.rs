@@ -152,7 +152,8 @@ impl Form {
         let t = text.trim();
         let o = &mut self.overrides;
         let err = |what: &str| format!("{}: {what}, got `{t}`", field.label());
-        let off = t.is_empty() || ["none", "off", "auto"].contains(&t.to_ascii_lowercase().as_str());
+        let off =
+            t.is_empty() || ["none", "off", "auto"].contains(&t.to_ascii_lowercase().as_str());
         match field {
             Field::Scene if t.is_empty() => return Err(err("a scene file or built-in name")),
             Field::Scene => self.scene = t.to_string(),

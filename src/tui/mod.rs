@@ -146,13 +146,14 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                     if let Some(log) = bench.as_mut() {
                         if last_log.elapsed() >= Duration::from_secs(1) {
                             last_log = Instant::now();
-                            let (samples, secs, spp) = app.snapshot.as_ref().map_or((0, 0.0, 0), |s| {
-                                (
-                                    s.stats.samples,
-                                    s.stats.elapsed.as_secs_f64(),
-                                    s.stats.complete_passes,
-                                )
-                            });
+                            let (samples, secs, spp) =
+                                app.snapshot.as_ref().map_or((0, 0.0, 0), |s| {
+                                    (
+                                        s.stats.samples,
+                                        s.stats.elapsed.as_secs_f64(),
+                                        s.stats.complete_passes,
+                                    )
+                                });
                             let _ = writeln!(
                                 log,
                                 "t {:.3} bytes {} samples {samples} render_secs {secs:.3} spp {spp}",

@@ -28,21 +28,12 @@ pub const HYSTERESIS: u8 = 4;
 const MAX_ZOOM: u32 = 16;
 
 /// Zoom and pan, in the user's terms.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ViewState {
     /// Zoom level k: the fitted scale divided by 2^k (clamped at 1 film pixel per sub-pixel).
     pub zoom: u32,
     /// Film coordinates of the viewport's centre; None: the film's centre.
     pub center: Option<(f64, f64)>,
-}
-
-impl Default for ViewState {
-    fn default() -> Self {
-        ViewState {
-            zoom: 0,
-            center: None,
-        }
-    }
 }
 
 /// Where the image lands in the preview area and which film pixels each sub-pixel averages.
@@ -277,12 +268,22 @@ mod tests {
     #[test]
     fn fit_keeps_aspect_and_centres() {
         // 320x240 into 40x10 cells = 40x20 square sub-pixels: height-limited, 12 px each.
-        let g = Geometry::new((320, 240), Rect::new(0, 0, 40, 10), &ViewState::default(), true);
+        let g = Geometry::new(
+            (320, 240),
+            Rect::new(0, 0, 40, 10),
+            &ViewState::default(),
+            true,
+        );
         assert_eq!(g.sx, 12.0);
         assert_eq!(g.size, (27, 20));
         assert_eq!(g.off, (6, 0));
         // Space mode: one sub-pixel per cell, twice as tall: same image shape.
-        let g = Geometry::new((320, 240), Rect::new(0, 0, 40, 10), &ViewState::default(), false);
+        let g = Geometry::new(
+            (320, 240),
+            Rect::new(0, 0, 40, 10),
+            &ViewState::default(),
+            false,
+        );
         assert_eq!((g.sx, g.sy, g.size), (12.0, 24.0, (27, 10)));
     }
 
@@ -310,7 +311,14 @@ mod tests {
         let snap = snapshot(4, 4, |x, _| [(x % 2) as f32; 3]);
         let mut cache = PreviewCache::default();
         let area = Rect::new(0, 0, 2, 1);
-        cache.update(&snap, area, &ViewState::default(), true, 1.0, Tonemap::Clamp);
+        cache.update(
+            &snap,
+            area,
+            &ViewState::default(),
+            true,
+            1.0,
+            Tonemap::Clamp,
+        );
         let want = display_rgb([0.5; 3], 1.0, Tonemap::Clamp);
         assert_eq!(cache.shown, vec![Some(want); 4]);
     }
@@ -339,11 +347,21 @@ mod tests {
         let snap = snapshot(1, 2, |_, y| if y == 0 { [1.0; 3] } else { [0.0; 3] });
         let mut cache = PreviewCache::default();
         let area = Rect::new(0, 0, 1, 1);
-        cache.update(&snap, area, &ViewState::default(), true, 1.0, Tonemap::Clamp);
+        cache.update(
+            &snap,
+            area,
+            &ViewState::default(),
+            true,
+            1.0,
+            Tonemap::Clamp,
+        );
         let mut buf = Buffer::empty(area);
         cache.draw(&mut buf, area, ColorMode::Truecolor);
         let cell = &buf[(0, 0)];
         assert_eq!(cell.symbol(), "▀");
-        assert_eq!((cell.fg, cell.bg), (Color::Rgb(255, 255, 255), Color::Rgb(0, 0, 0)));
+        assert_eq!(
+            (cell.fg, cell.bg),
+            (Color::Rgb(255, 255, 255), Color::Rgb(0, 0, 0))
+        );
     }
 }

@@ -42,7 +42,11 @@ pub fn file_name(dir: &Path, scene: &str, spp: u32, unix_secs: u64, kind: SaveKi
             }
         })
         .collect();
-    let stem = if stem.is_empty() { "render".into() } else { stem };
+    let stem = if stem.is_empty() {
+        "render".into()
+    } else {
+        stem
+    };
     let (y, mo, d) = civil_from_days((unix_secs / 86_400) as i64);
     let s = unix_secs % 86_400;
     dir.join(format!(
@@ -94,15 +98,9 @@ pub fn spawn_save(
         .name("ptui-save".into())
         .spawn(move || {
             let result = std::panic::catch_unwind(|| {
-                let data = output::encode(
-                    &path,
-                    snap.width,
-                    snap.height,
-                    &snap.rgb,
-                    exposure,
-                    tonemap,
-                )
-                .map_err(|e| e.to_string())?;
+                let data =
+                    output::encode(&path, snap.width, snap.height, &snap.rgb, exposure, tonemap)
+                        .map_err(|e| e.to_string())?;
                 output::write_atomic(&path, &data).map_err(|e| e.to_string())?;
                 Ok(path.strip_prefix(".").unwrap_or(&path).to_path_buf())
             })

@@ -53,8 +53,8 @@ pub fn layout(area: Rect, app: &App) -> Areas {
     let [form, right] =
         Layout::horizontal([Constraint::Length(form_w), Constraint::Min(1)]).areas(body);
     let (preview, chart) = if app.show_chart {
-        let [p, c] = Layout::vertical([Constraint::Percentage(60), Constraint::Percentage(40)])
-            .areas(right);
+        let [p, c] =
+            Layout::vertical([Constraint::Percentage(60), Constraint::Percentage(40)]).areas(right);
         (p, Some(c))
     } else {
         (right, None)
@@ -123,13 +123,14 @@ fn draw_title(frame: &mut Frame, app: &App, area: Rect) {
         super::color::ColorMode::Truecolor => "truecolor",
         super::color::ColorMode::Ansi256 => "256 colours",
     };
-    let shape = if app.halfblock { "half-block" } else { "spaces" };
+    let shape = if app.halfblock {
+        "half-block"
+    } else {
+        "spaces"
+    };
     let left = Line::from(vec![
         Span::styled(" ptui ", Style::new().bold().reversed()),
-        Span::raw(format!(
-            "  {} {}x{}  ",
-            app.scene_name, s.width, s.height
-        )),
+        Span::raw(format!("  {} {}x{}  ", app.scene_name, s.width, s.height)),
         Span::styled(state_name(app), Style::new().bold()),
         Span::raw(format!("  zoom {zoom}  {mode}  {shape}")),
     ]);
@@ -224,10 +225,7 @@ fn draw_gauge(frame: &mut Frame, app: &App, area: Rect) {
         JobStatus::Running | JobStatus::Paused => "--".into(),
         _ => "0:00".into(),
     };
-    let label = format!(
-        "{done}/{target} spp  {}  ETA {eta}",
-        fmt_duration(elapsed)
-    );
+    let label = format!("{done}/{target} spp  {}  ETA {eta}", fmt_duration(elapsed));
     let gauge = Gauge::default()
         .ratio((done as f64 / target as f64).clamp(0.0, 1.0))
         .label(label)
@@ -336,7 +334,9 @@ fn draw_chart(frame: &mut Frame, app: &App, area: Rect) {
     let (y_lo, y_hi) = pts
         .iter()
         .chain(guide.iter())
-        .fold((f64::MAX, f64::MIN), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
+        .fold((f64::MAX, f64::MIN), |(lo, hi), p| {
+            (lo.min(p.1), hi.max(p.1))
+        });
     let xb = [x0.floor(), x_hi.ceil().max(x0.floor() + 1.0)];
     let yb = [y_lo.floor(), y_hi.ceil().max(y_lo.floor() + 1.0)];
     let datasets = vec![
@@ -372,8 +372,14 @@ fn draw_chart(frame: &mut Frame, app: &App, area: Rect) {
 
 const HELP: &[(&str, &str)] = &[
     ("Tab / Shift-Tab", "select a form field"),
-    ("Enter", "edit the field (integrator, tonemap, colour cycle)"),
-    ("Enter / Esc", "while editing: apply / cancel (Ctrl-U clears)"),
+    (
+        "Enter",
+        "edit the field (integrator, tonemap, colour cycle)",
+    ),
+    (
+        "Enter / Esc",
+        "while editing: apply / cancel (Ctrl-U clears)",
+    ),
     ("space", "pause / resume the render"),
     ("r", "restart the render from zero samples"),
     ("s / e", "save the full-resolution PNG / linear EXR"),
@@ -510,6 +516,21 @@ mod tests {
     #[test]
     fn smallest_supported_terminal() {
         let app = app(MIN_WIDTH, MIN_HEIGHT);
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn error_chart_panel() {
+        let mut app = app(80, 24);
+        // RMSE falling as 1/sqrt(t) from 0.1 at 0.1 s to 0.001 at 1000 s.
+        app.history = (0..9)
+            .map(|k| {
+                let t = 10f64.powf(k as f64 / 2.0 - 1.0);
+                (t, 0.1 / (10.0 * t).sqrt())
+            })
+            .collect();
+        app.show_chart = true;
+        app.resize(80, 24);
         insta::assert_snapshot!(render(&app).backend());
     }
 

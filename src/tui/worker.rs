@@ -66,6 +66,8 @@ pub struct Snapshot {
     pub status: JobStatus,
 }
 
+// A few hundred bytes per event, a few events per second: boxing would buy nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
 pub enum WorkerEvent {
     /// A request was accepted; `restarted` says whether a new film was started (or the current
@@ -82,7 +84,10 @@ pub enum WorkerEvent {
     },
     Progress(Arc<Snapshot>),
     /// A request could not start (scene error, invalid settings); the previous render goes on.
-    Failed { request: u64, message: String },
+    Failed {
+        request: u64,
+        message: String,
+    },
     /// A render thread panicked; the render is dropped and the worker waits for a new request.
     Panicked(String),
 }
@@ -220,9 +225,7 @@ impl Worker {
             Err(payload) => {
                 self.job = None;
                 let msg = super::term::panic_message(&*payload);
-                let _ = self
-                    .events
-                    .send(Event::Render(WorkerEvent::Panicked(msg)));
+                let _ = self.events.send(Event::Render(WorkerEvent::Panicked(msg)));
                 true
             }
         }
@@ -279,10 +282,10 @@ impl Worker {
 
         let continues = !req.fresh
             && self.job.as_ref().is_some_and(|j| {
-            Arc::ptr_eq(&j.renderer.scene, &scene)
-                && same_image(&j.renderer.settings, &settings)
-                && j.renderer.stats().complete_passes > 0
-        });
+                Arc::ptr_eq(&j.renderer.scene, &scene)
+                    && same_image(&j.renderer.settings, &settings)
+                    && j.renderer.stats().complete_passes > 0
+            });
         let restarted = !continues;
         if continues {
             let job = self.job.as_mut().expect("checked above");
@@ -477,5 +480,41 @@ mod tests {
             other => panic!("expected a failure, got {other:?}"),
         }
         worker.shutdown();
+    }
+
+    #[test]
+    fn target_error_stops_the_render() {
+        let (tx, rx) = mpsc::channel();
+        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let mut req = request(1, 1000, IntegratorKind::Path);
+        // A relative error of 0.5 is reached within a few passes on 16x12 pixels.
+        req.layers[0].target_error = Some(0.5);
+        worker.send(Command::Start(req));
+        let snap = until(&rx, JobStatus::TargetReached);
+        assert!(snap.error.relative() <= 0.5, "{:?}", snap.error);
+        assert!(snap.stats.complete_passes < 1000);
+        worker.shutdown();
+    }
+
+    #[test]
+    fn a_panic_is_reported_and_the_worker_goes_on() {
+        let (tx, rx) = mpsc::channel();
+        let (_cmd_tx, cmd_rx) = mpsc::channel();
+        let mut worker = Worker {
+            events: tx,
+            rx: cmd_rx,
+            cancel: Arc::new(AtomicBool::new(false)),
+            min_interval: Duration::ZERO,
+            pool: None,
+            scene: None,
+            job: None,
+            next_job: 1,
+        };
+        let go_on = worker.guarded(|_| panic!("boom in a render thread"));
+        assert!(go_on);
+        match rx.try_recv() {
+            Ok(Event::Render(WorkerEvent::Panicked(msg))) => assert!(msg.contains("boom"), "{msg}"),
+            other => panic!("expected a panic report, got {other:?}"),
+        }
     }
 }
