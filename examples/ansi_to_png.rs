@@ -99,6 +99,30 @@ fn main() -> anyhow::Result<()> {
                     fill(&mut img, x, y + CELL_H / 2, CELL_W, CELL_H / 2, bg);
                 }
                 "█" => fill(&mut img, x, y, CELL_W, CELL_H, fg),
+                // Braille (the chart): 2x4 dots, bit k of the offset from U+2800 is dot k+1.
+                _ if s
+                    .chars()
+                    .next()
+                    .is_some_and(|c| ('\u{2800}'..='\u{28ff}').contains(&c)) =>
+                {
+                    fill(&mut img, x, y, CELL_W, CELL_H, bg);
+                    let bits = s.chars().next().map_or(0, |c| c as u32 - 0x2800);
+                    const DOTS: [(u32, u32); 8] = [
+                        (0, 0),
+                        (0, 1),
+                        (0, 2),
+                        (1, 0),
+                        (1, 1),
+                        (1, 2),
+                        (0, 3),
+                        (1, 3),
+                    ];
+                    for (k, (dx, dy)) in DOTS.iter().enumerate() {
+                        if bits & (1 << k) != 0 {
+                            fill(&mut img, x + 2 + dx * 4, y + 1 + dy * 5, 3, 3, fg);
+                        }
+                    }
+                }
                 _ => {
                     fill(&mut img, x, y, CELL_W, CELL_H, bg);
                     let Some(ch) = s.chars().next().filter(|c| !c.is_whitespace()) else {

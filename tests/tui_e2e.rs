@@ -91,28 +91,26 @@ fn gauge(screen: &str) -> Option<(u32, u32)> {
     })
 }
 
-#[test]
-fn tui_renders_changes_spp_saves_and_restores_the_terminal() {
-    if Command::new("tmux").arg("-V").output().is_err() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "tmux is needed for the end-to-end test"
-        );
-        eprintln!("skipping: tmux is not installed");
-        return;
+fn tmux_available() -> bool {
+    if Command::new("tmux").arg("-V").output().is_ok() {
+        return true;
     }
-    let dir: PathBuf = std::env::temp_dir().join(format!("ptui-e2e-{}", std::process::id()));
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "tmux is needed for the end-to-end tests"
+    );
+    eprintln!("skipping: tmux is not installed");
+    false
+}
+
+/// A fresh directory and a detached 100x30 tmux session running `script` in it.
+fn session(name: &str, script: &str) -> (Tmux, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("ptui-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let tmux = Tmux {
-        socket: format!("ptui-e2e-{}", std::process::id()),
+        socket: format!("ptui-{name}-{}", std::process::id()),
     };
-    let bin = env!("CARGO_BIN_EXE_ptui");
-    // After ptui exits, record the tty's modes and the exit code in the same terminal.
-    let script = format!(
-        "'{bin}' cornell --size 64x48 --spp 100000 --color 256; echo $? > exit.txt; \
-         stty -a > stty.txt; sleep 600"
-    );
     let out = tmux.run(&[
         "new-session",
         "-d",
@@ -124,9 +122,71 @@ fn tui_renders_changes_spp_saves_and_restores_the_terminal() {
         "30",
         "-c",
         dir.to_str().unwrap(),
-        &script,
+        script,
     ]);
     assert!(out.status.success(), "tmux new-session: {out:?}");
+    (tmux, dir)
+}
+
+/// The terminal is back to normal: cooked mode (as recorded by `stty -a` after ptui exited),
+/// main screen, cursor shown.
+fn assert_restored(tmux: &Tmux, dir: &Path) {
+    assert!(
+        wait_for_file(&dir.join("stty.txt"), 60),
+        "ptui did not exit; screen:\n{}",
+        tmux.screen()
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    let stty = std::fs::read_to_string(dir.join("stty.txt")).unwrap();
+    let modes: Vec<&str> = stty.split_whitespace().collect();
+    for mode in ["icanon", "echo", "isig"] {
+        assert!(modes.contains(&mode), "{mode} not restored: {stty}");
+    }
+    assert_eq!(
+        tmux.display("#{alternate_on}"),
+        "0",
+        "left the alternate screen"
+    );
+    assert_eq!(tmux.display("#{cursor_flag}"), "1", "cursor visible again");
+}
+
+#[test]
+fn sigterm_restores_the_terminal() {
+    if !tmux_available() {
+        return;
+    }
+    let bin = env!("CARGO_BIN_EXE_ptui");
+    // The inner shell records its pid and becomes ptui, so pid.txt names ptui.
+    let script = format!(
+        "sh -c 'echo $$ > pid.txt; exec \"{bin}\" cornell --size 32x24 --spp 100000'; \
+         echo $? > exit.txt; stty -a > stty.txt; sleep 600"
+    );
+    let (tmux, dir) = session("sigterm", &script);
+    tmux.wait_for("render progress", 120, |s| {
+        gauge(s).is_some_and(|(done, _)| done >= 1)
+    });
+    let pid = std::fs::read_to_string(dir.join("pid.txt")).unwrap();
+    let status = Command::new("kill")
+        .args(["-TERM", pid.trim()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    assert_restored(&tmux, &dir);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn tui_renders_changes_spp_saves_and_restores_the_terminal() {
+    if !tmux_available() {
+        return;
+    }
+    let bin = env!("CARGO_BIN_EXE_ptui");
+    // After ptui exits, record the tty's modes and the exit code in the same terminal.
+    let script = format!(
+        "'{bin}' cornell --size 64x48 --spp 100000 --color 256; echo $? > exit.txt; \
+         stty -a > stty.txt; sleep 600"
+    );
+    let (tmux, dir) = session("e2e", &script);
 
     // Progress: some passes of the 100000 done.
     tmux.wait_for("render progress", 120, |s| {
@@ -164,24 +224,8 @@ fn tui_renders_changes_spp_saves_and_restores_the_terminal() {
     );
 
     tmux.keys(&["q"]);
-    assert!(
-        wait_for_file(&dir.join("stty.txt"), 60),
-        "ptui did not exit; screen:\n{}",
-        tmux.screen()
-    );
-    std::thread::sleep(Duration::from_millis(200));
+    assert_restored(&tmux, &dir);
     let exit = std::fs::read_to_string(dir.join("exit.txt")).unwrap();
     assert_eq!(exit.trim(), "0");
-    let stty = std::fs::read_to_string(dir.join("stty.txt")).unwrap();
-    let modes: Vec<&str> = stty.split_whitespace().collect();
-    for mode in ["icanon", "echo", "isig"] {
-        assert!(modes.contains(&mode), "{mode} not restored: {stty}");
-    }
-    assert_eq!(
-        tmux.display("#{alternate_on}"),
-        "0",
-        "left the alternate screen"
-    );
-    assert_eq!(tmux.display("#{cursor_flag}"), "1", "cursor visible again");
     let _ = std::fs::remove_dir_all(&dir);
 }

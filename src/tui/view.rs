@@ -228,7 +228,7 @@ fn draw_gauge(frame: &mut Frame, app: &App, area: Rect) {
     let label = format!("{done}/{target} spp  {}  ETA {eta}", fmt_duration(elapsed));
     let gauge = Gauge::default()
         .ratio((done as f64 / target as f64).clamp(0.0, 1.0))
-        .label(label)
+        .label(Span::styled(label, Style::new().white().bold()))
         .gauge_style(Style::new().fg(Color::Blue).bg(Color::Black));
     frame.render_widget(gauge, area);
 }
@@ -286,7 +286,7 @@ fn draw_status(frame: &mut Frame, app: &App, area: Rect) {
 /// Decade tick labels for a log10 axis from `lo` to `hi` (both integers).
 fn decade_labels(lo: f64, hi: f64, unit: &str) -> Vec<Span<'static>> {
     let (lo, hi) = (lo as i32, hi as i32);
-    let mid = (lo + hi) / 2;
+    let mid = lo + (hi - lo) / 2;
     let mut ks = vec![lo];
     if mid != lo && mid != hi {
         ks.push(mid);
@@ -337,8 +337,14 @@ fn draw_chart(frame: &mut Frame, app: &App, area: Rect) {
         .fold((f64::MAX, f64::MIN), |(lo, hi), p| {
             (lo.min(p.1), hi.max(p.1))
         });
-    let xb = [x0.floor(), x_hi.ceil().max(x0.floor() + 1.0)];
-    let yb = [y_lo.floor(), y_hi.ceil().max(y_lo.floor() + 1.0)];
+    // Whole decades, an even number of them: ratatui spaces labels evenly, so the middle
+    // label must sit at a whole decade too.
+    let decades = |lo: f64, hi: f64| {
+        let (lo, hi) = (lo.floor(), hi.ceil().max(lo.floor() + 1.0));
+        [lo, hi + (hi - lo) % 2.0]
+    };
+    let xb = decades(x0, x_hi);
+    let yb = decades(y_lo, y_hi);
     let datasets = vec![
         Dataset::default()
             .name("1/sqrt(t)")
