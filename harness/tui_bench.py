@@ -59,12 +59,34 @@ def env_for(mode):
         env["COLORTERM"] = "truecolor"
     return env
 
+def thread_cpu(pid):
+    """CPU seconds (user + system) per thread name of a running process."""
+    tick = os.sysconf("SC_CLK_TCK")
+    out = {}
+    for tid in os.listdir(f"/proc/{pid}/task"):
+        try:
+            stat = open(f"/proc/{pid}/task/{tid}/stat").read()
+        except OSError:
+            continue
+        name = stat[stat.index("(") + 1:stat.rindex(")")]
+        fields = stat[stat.rindex(")") + 2:].split()
+        out[name] = out.get(name, 0.0) + (int(fields[11]) + int(fields[12])) / tick
+    return out
+
+CPU = []
+
 def bandwidth(bin, mode, seconds, log):
     pid, fd = spawn([bin, "cornell", "--spp", "1000000", "--color", mode, "--bench-log", log],
                     env_for(mode))
     t0 = time.monotonic()
     sink = []
     read_for(fd, seconds, sink)
+    cpu = thread_cpu(pid)
+    render = sum(v for k, v in cpu.items() if k.startswith("ptui-render"))
+    other = sum(v for k, v in cpu.items() if not k.startswith("ptui-render"))
+    CPU.append((render, other))
+    print(f"  CPU seconds: render threads {render:.2f}, everything else (UI, worker, input, "
+          f"tick) {other:.2f} -> {100 * other / (render + other):.2f}% of the process")
     finish(pid, fd)
     window = 20.0
     start = t0 + seconds - window

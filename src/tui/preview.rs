@@ -364,4 +364,26 @@ mod tests {
             (Color::Rgb(255, 255, 255), Color::Rgb(0, 0, 0))
         );
     }
+
+    #[test]
+    fn space_mode_paints_backgrounds_only() {
+        // 1x2 film in one 1x1 cell of spaces: one sub-pixel, 1 wide and 2 tall (the cell's
+        // shape), averaging both pixels.
+        let snap = snapshot(1, 2, |_, y| [y as f32; 3]);
+        let mut cache = PreviewCache::default();
+        let area = Rect::new(0, 0, 1, 1);
+        cache.update(
+            &snap,
+            area,
+            &ViewState::default(),
+            false,
+            1.0,
+            Tonemap::Clamp,
+        );
+        let mut buf = Buffer::empty(area);
+        cache.draw(&mut buf, area, ColorMode::Truecolor);
+        let [r, g, b] = display_rgb([0.5; 3], 1.0, Tonemap::Clamp);
+        assert_eq!(buf[(0, 0)].symbol(), " ");
+        assert_eq!(buf[(0, 0)].bg, Color::Rgb(r, g, b));
+    }
 }
