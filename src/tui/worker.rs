@@ -295,8 +295,8 @@ impl Worker {
             let pool = match &self.pool {
                 Some((n, p)) if *n == settings.threads => p.clone(),
                 _ => {
-                    // Drop the old job first so its pool's threads can go.
-                    self.job = None;
+                    // The old job keeps its own pool alive until it is replaced below, so a
+                    // failure here leaves the current render running.
                     let p = niced_pool(settings.threads).map_err(|e| e.to_string())?;
                     self.pool = Some((settings.threads, p.clone()));
                     p
