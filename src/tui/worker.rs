@@ -466,6 +466,23 @@ mod tests {
     }
 
     #[test]
+    fn a_new_request_cancels_a_long_render() {
+        let (tx, rx) = mpsc::channel();
+        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        // 64x48 at a million spp would take hours: only cancelling lets the next one run.
+        let mut long = request(1, 1_000_000, IntegratorKind::Path);
+        long.layers[0].width = Some(64);
+        long.layers[0].height = Some(48);
+        worker.send(Command::Start(long));
+        let first = until(&rx, JobStatus::Running);
+        worker.send(Command::Start(request(2, 2, IntegratorKind::Naive)));
+        let next = until(&rx, JobStatus::Done);
+        assert_ne!(next.job, first.job);
+        assert_eq!((next.width, next.stats.complete_passes), (16, 2));
+        worker.shutdown();
+    }
+
+    #[test]
     fn a_bad_scene_fails_the_request_only() {
         let (tx, rx) = mpsc::channel();
         let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
