@@ -1,6 +1,7 @@
 use clap::Parser;
-use ptui::cli::{self, Cli, Command, RenderArgs};
+use ptui::cli::{self, Cli, Command};
 use ptui::scene::builtin;
+use ptui::tui::{self, TuiOptions};
 
 fn main() {
     let cli = Cli::parse();
@@ -14,13 +15,13 @@ fn main() {
             }
             Ok(())
         }
-        // Until the TUI lands, the main job is the headless render of the default scene.
-        None => cli::render::run(&RenderArgs {
-            scene: cli.scene.clone(),
-            settings: cli.settings.clone(),
-            output: "render.png".into(),
-            quiet: false,
-            error_map: None,
+        None => tui::run(TuiOptions {
+            scene: cli.scene.clone().unwrap_or_else(|| builtin::DEFAULT.into()),
+            cli: cli.settings.overrides(),
+            color: cli.tui.color,
+            fps: cli.tui.fps,
+            halfblock: !cli.tui.spaces,
+            bench_log: cli.tui.bench_log.clone(),
         }),
     };
     if let Err(e) = result {

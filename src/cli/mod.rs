@@ -3,6 +3,7 @@
 pub mod check;
 pub mod converge;
 pub mod render;
+pub mod tui;
 
 use crate::integrator::painterly::params::{parse_unit, MAX_PAINT_DEPTH, MAX_STROKE};
 use crate::sampling::SamplerKind;
@@ -23,6 +24,8 @@ pub struct Cli {
     pub scene: Option<String>,
     #[command(flatten)]
     pub settings: SettingsArgs,
+    #[command(flatten)]
+    pub tui: tui::TuiArgs,
 }
 
 #[derive(Subcommand, Debug)]

@@ -1,0 +1,194 @@
+//! The terminal UI: `ptui [SCENE]`.
+//!
+//! One event channel feeds the UI thread: key presses and resizes (input thread), ticks, signals,
+//! render progress (the worker, see [`worker`]) and finished saves. The loop waits for an event,
+//! updates the [`app::App`] model, and draws the [`view`] (a function of the model) at most
+//! `--fps` times a second for render progress, at once for a key press. Frames are wrapped in
+//! synchronized-update sequences so the terminal never shows half a frame.
+
+pub mod app;
+pub mod color;
+pub mod event;
+pub mod form;
+pub mod preview;
+pub mod save;
+pub mod term;
+pub mod view;
+pub mod worker;
+
+use crate::settings::SettingsOverrides;
+use anyhow::Context;
+use app::{Action, App};
+use color::ColorChoice;
+use crossterm::queue;
+use crossterm::terminal::{BeginSynchronizedUpdate, EndSynchronizedUpdate};
+use event::Event;
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::{Duration, Instant};
+use worker::{Command, WorkerHandle};
+
+/// How the TUI was asked to run (from the command line).
+#[derive(Clone, Debug)]
+pub struct TuiOptions {
+    pub scene: String,
+    pub cli: SettingsOverrides,
+    pub color: ColorChoice,
+    pub fps: u32,
+    pub halfblock: bool,
+    /// Append a line per second with bytes written to the terminal and render progress, and a
+    /// line per key press with its key-to-flush latency (for the measuring harness).
+    pub bench_log: Option<PathBuf>,
+}
+
+pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
+    if !std::io::stdout().is_terminal() || !std::io::stdin().is_terminal() {
+        anyhow::bail!("the TUI needs a terminal; for a headless render use `ptui render`");
+    }
+    let mut bench = match &opts.bench_log {
+        Some(p) => Some(std::io::BufWriter::new(
+            std::fs::File::create(p).with_context(|| format!("{}", p.display()))?,
+        )),
+        None => None,
+    };
+    let frame_time = Duration::from_secs_f64(1.0 / opts.fps.max(1) as f64);
+    let (tx, rx) = mpsc::channel();
+    let worker = WorkerHandle::spawn(tx.clone(), frame_time)?;
+    let mut app = App::new(
+        opts.scene.clone(),
+        opts.cli.clone(),
+        opts.color,
+        opts.color.resolve(),
+        opts.halfblock,
+    );
+    let first = app.request(true);
+    worker.send(Command::Start(first));
+
+    let mut guard = term::TermGuard::enter().context("cannot set up the terminal")?;
+    event::spawn_input(tx.clone())?;
+    event::spawn_tick(tx.clone(), Duration::from_millis(250))?;
+    event::spawn_signals(tx.clone())?;
+    let size = guard.terminal.size()?;
+    app.resize(size.width, size.height);
+
+    let started = Instant::now();
+    let mut last_log = started;
+    let mut last_draw: Option<Instant> = None;
+    let mut dirty = true;
+    let mut urgent = true;
+    let mut keys: Vec<Instant> = Vec::new();
+    let result: anyhow::Result<()> = loop {
+        if app.quit {
+            break Ok(());
+        }
+        let due = last_draw.is_none_or(|t| t.elapsed() >= frame_time);
+        if urgent || (dirty && due) {
+            app.apply_pending();
+            if let Err(e) = draw(&mut guard.terminal, &app) {
+                break Err(e.into());
+            }
+            let now = Instant::now();
+            if let Some(log) = bench.as_mut() {
+                for k in keys.drain(..) {
+                    let _ = writeln!(log, "key {:.3}", (now - k).as_secs_f64() * 1e3);
+                }
+            }
+            keys.clear();
+            last_draw = Some(now);
+            dirty = false;
+            urgent = false;
+        }
+        let wait = match last_draw {
+            Some(t) if dirty => frame_time.saturating_sub(t.elapsed()),
+            _ => Duration::from_secs(3600),
+        };
+        let mut next = match rx.recv_timeout(wait) {
+            Ok(ev) => Some(ev),
+            Err(RecvTimeoutError::Timeout) => None,
+            Err(RecvTimeoutError::Disconnected) => break Ok(()),
+        };
+        while let Some(ev) = next {
+            match ev {
+                Event::Key(key, at) => {
+                    keys.push(at);
+                    urgent = true;
+                    match app.on_key(key) {
+                        Some(Action::Start(req)) => worker.send(Command::Start(req)),
+                        Some(Action::Pause(p)) => worker.send(Command::Pause(p)),
+                        Some(Action::Save(kind)) => {
+                            if let Some(snap) = app.snapshot.clone() {
+                                let s = app.settings();
+                                save::spawn_save(
+                                    snap,
+                                    app.scene_name.clone(),
+                                    kind,
+                                    s.exposure,
+                                    s.tonemap,
+                                    tx.clone(),
+                                );
+                            }
+                        }
+                        Some(Action::Quit) | None => {}
+                    }
+                }
+                Event::Resize(w, h) => {
+                    app.resize(w, h);
+                    urgent = true;
+                }
+                Event::Render(ev) => dirty |= app.on_worker(ev),
+                Event::Saved(r) => {
+                    app.on_saved(r);
+                    dirty = true;
+                }
+                Event::Tick => {
+                    if let Some(log) = bench.as_mut() {
+                        if last_log.elapsed() >= Duration::from_secs(1) {
+                            last_log = Instant::now();
+                            let (samples, secs, spp) =
+                                app.snapshot.as_ref().map_or((0, 0.0, 0), |s| {
+                                    (
+                                        s.stats.samples,
+                                        s.stats.elapsed.as_secs_f64(),
+                                        s.stats.complete_passes,
+                                    )
+                                });
+                            let _ = writeln!(
+                                log,
+                                "t {:.3} bytes {} samples {samples} render_secs {secs:.3} spp {spp}",
+                                started.elapsed().as_secs_f64(),
+                                guard.bytes.load(Ordering::Relaxed),
+                            );
+                            let _ = log.flush();
+                        }
+                    }
+                }
+                Event::Terminate(_) => app.quit = true,
+                Event::InputError(e) => {
+                    app.quit = true;
+                    app.fatal = Some(format!("cannot read the terminal: {e}"));
+                }
+            }
+            next = rx.try_recv().ok();
+        }
+    };
+    worker.shutdown();
+    if let Some(log) = bench.as_mut() {
+        let _ = log.flush();
+    }
+    drop(guard);
+    result?;
+    match app.fatal {
+        Some(e) => Err(anyhow::anyhow!(e)),
+        None => Ok(()),
+    }
+}
+
+/// One frame inside a synchronized update.
+fn draw(terminal: &mut term::Term, app: &App) -> std::io::Result<()> {
+    queue!(terminal.backend_mut(), BeginSynchronizedUpdate)?;
+    terminal.draw(|f| view::draw(f, app))?;
+    queue!(terminal.backend_mut(), EndSynchronizedUpdate)?;
+    terminal.backend_mut().flush()
+}

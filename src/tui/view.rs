@@ -1,0 +1,570 @@
+//! The view: a pure function of [`App`] drawn into a ratatui frame.
+//!
+//! ```text
+//!  ptui  cornell 320x240  running  zoom fit  256 colours  half-block          ? help
+//!  scene      cornell  │▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀▀
+//!  width      320      │      preview (half-blocks), optional error chart below
+//!  ...                 │
+//!  [=========         ] 64/256 spp  0:12  ETA 0:36
+//!  64 spp · 2.01 M samples/s · est. error 0.0123 (rel 0.031) · invalid 0 · 2 threads
+//!  saved cornell-64spp-….png · accel: flat; light sampling: power
+//! ```
+
+use super::app::{App, Message};
+use super::form::{Field, Shown};
+use super::worker::JobStatus;
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style, Stylize};
+use ratatui::symbols::Marker;
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{
+    Axis, Block, Borders, Chart, Clear, Dataset, Gauge, GraphType, Paragraph, Wrap,
+};
+use ratatui::Frame;
+
+/// Smallest terminal the layout works in.
+pub const MIN_WIDTH: u16 = 40;
+pub const MIN_HEIGHT: u16 = 12;
+
+/// Width of the form's labels.
+const LABEL: usize = 11;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Areas {
+    pub title: Rect,
+    pub form: Rect,
+    /// None when the terminal is below the minimum size.
+    pub preview: Option<Rect>,
+    pub chart: Option<Rect>,
+    pub gauge: Rect,
+    pub status: Rect,
+}
+
+/// Where everything goes in a terminal of size `area`.
+pub fn layout(area: Rect, app: &App) -> Areas {
+    let [title, body, gauge, status] = Layout::vertical([
+        Constraint::Length(1),
+        Constraint::Min(1),
+        Constraint::Length(1),
+        Constraint::Length(2),
+    ])
+    .areas(area);
+    let form_w = (area.width / 3).clamp(20, 30);
+    let [form, right] =
+        Layout::horizontal([Constraint::Length(form_w), Constraint::Min(1)]).areas(body);
+    let (preview, chart) = if app.show_chart {
+        let [p, c] =
+            Layout::vertical([Constraint::Percentage(60), Constraint::Percentage(40)]).areas(right);
+        (p, Some(c))
+    } else {
+        (right, None)
+    };
+    let big_enough = area.width >= MIN_WIDTH && area.height >= MIN_HEIGHT;
+    Areas {
+        title,
+        form,
+        preview: big_enough.then_some(preview),
+        chart: chart.filter(|_| big_enough),
+        gauge,
+        status,
+    }
+}
+
+pub fn draw(frame: &mut Frame, app: &App) {
+    let area = frame.area();
+    let areas = layout(area, app);
+    let Some(preview) = areas.preview else {
+        let text = format!(
+            "Terminal too small: {}x{}.\nptui needs at least {MIN_WIDTH}x{MIN_HEIGHT}.\nq quits.",
+            area.width, area.height
+        );
+        frame.render_widget(Paragraph::new(text).wrap(Wrap { trim: true }), area);
+        return;
+    };
+    draw_title(frame, app, areas.title);
+    draw_form(frame, app, areas.form);
+    if app.snapshot.is_some() {
+        app.preview
+            .draw(frame.buffer_mut(), preview, app.color_mode);
+    } else {
+        frame.render_widget(Paragraph::new("starting…").dark_gray(), preview);
+    }
+    if let Some(chart) = areas.chart {
+        draw_chart(frame, app, chart);
+    }
+    draw_gauge(frame, app, areas.gauge);
+    draw_status(frame, app, areas.status);
+    if app.show_help {
+        draw_help(frame, area);
+    }
+}
+
+fn state_name(app: &App) -> &'static str {
+    if app.worker_panic.is_some() {
+        return "failed";
+    }
+    match app.status() {
+        None => "starting",
+        Some(JobStatus::Running) => "running",
+        Some(JobStatus::Paused) => "paused",
+        Some(JobStatus::Done) => "done",
+        Some(JobStatus::TargetReached) => "target error reached",
+    }
+}
+
+fn draw_title(frame: &mut Frame, app: &App, area: Rect) {
+    let s = app.settings();
+    let zoom = match app.preview.geometry() {
+        Some(g) if g.sx <= 1.0 && app.view.zoom > 0 => "1:1".to_string(),
+        _ if app.view.zoom == 0 => "fit".into(),
+        _ => format!("{}x", 1u32 << app.view.zoom),
+    };
+    let mode = match app.color_mode {
+        super::color::ColorMode::Truecolor => "truecolor",
+        super::color::ColorMode::Ansi256 => "256 colours",
+    };
+    let shape = if app.halfblock {
+        "half-block"
+    } else {
+        "spaces"
+    };
+    let left = Line::from(vec![
+        Span::styled(" ptui ", Style::new().bold().reversed()),
+        Span::raw(format!("  {} {}x{}  ", app.scene_name, s.width, s.height)),
+        Span::styled(state_name(app), Style::new().bold()),
+        Span::raw(format!("  zoom {zoom}  {mode}  {shape}")),
+    ]);
+    frame.render_widget(left, area);
+    let help = Line::from("? help ").right_aligned().dark_gray();
+    if area.width >= 60 {
+        frame.render_widget(help, area);
+    }
+}
+
+fn draw_form(frame: &mut Frame, app: &App, area: Rect) {
+    let block = Block::new()
+        .borders(Borders::RIGHT)
+        .border_style(Style::new().dark_gray());
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let s = app.settings();
+    let now = Shown {
+        settings: &s,
+        color_mode: app.color_mode,
+        threads: app.threads,
+    };
+    // Scroll so the selected field stays visible in short terminals.
+    let rows = inner.height.max(1) as usize;
+    let first = app.form.selected.saturating_sub(rows - 1);
+    let value_w = (inner.width as usize).saturating_sub(LABEL + 1);
+    let lines: Vec<Line> = Field::ALL
+        .iter()
+        .enumerate()
+        .skip(first)
+        .take(rows)
+        .map(|(i, &field)| {
+            let selected = i == app.form.selected;
+            let (value, style) = match (&app.form.editing, selected) {
+                (Some(text), true) => (format!("{text}_"), Style::new().yellow().bold()),
+                _ => (app.form.value(field, &now), Style::new()),
+            };
+            let value = clip_left(&value, value_w);
+            let label = format!(" {:<w$}", field.label(), w = LABEL - 1);
+            let label_style = if selected {
+                Style::new().reversed()
+            } else {
+                Style::new().dark_gray()
+            };
+            Line::from(vec![
+                Span::styled(label, label_style),
+                Span::raw(" "),
+                Span::styled(value, style),
+            ])
+        })
+        .collect();
+    frame.render_widget(Paragraph::new(lines), inner);
+}
+
+/// Keep the end of `s` (the part being typed, the file name of a path) within `w` columns.
+fn clip_left(s: &str, w: usize) -> String {
+    let n = s.chars().count();
+    if n <= w {
+        s.to_string()
+    } else if w == 0 {
+        String::new()
+    } else {
+        let tail: String = s.chars().skip(n - (w - 1)).collect();
+        format!("…{tail}")
+    }
+}
+
+pub fn fmt_duration(secs: f64) -> String {
+    if !secs.is_finite() {
+        return "--".into();
+    }
+    let s = secs.round() as u64;
+    if s >= 3600 {
+        format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+    } else {
+        format!("{}:{:02}", s / 60, s % 60)
+    }
+}
+
+fn draw_gauge(frame: &mut Frame, app: &App, area: Rect) {
+    let Some(snap) = &app.snapshot else {
+        frame.render_widget(Line::from(" waiting for the first pass…").dark_gray(), area);
+        return;
+    };
+    let done = snap.stats.complete_passes;
+    let target = snap.target_spp.max(1);
+    let elapsed = snap.stats.elapsed.as_secs_f64();
+    let eta = match snap.status {
+        JobStatus::Running | JobStatus::Paused if done > 0 => {
+            fmt_duration(elapsed * (target.saturating_sub(done)) as f64 / done as f64)
+        }
+        JobStatus::Running | JobStatus::Paused => "--".into(),
+        _ => "0:00".into(),
+    };
+    let label = format!("{done}/{target} spp  {}  ETA {eta}", fmt_duration(elapsed));
+    let gauge = Gauge::default()
+        .ratio((done as f64 / target as f64).clamp(0.0, 1.0))
+        .label(Span::styled(label, Style::new().white().bold()))
+        .gauge_style(Style::new().fg(Color::Blue).bg(Color::Black));
+    frame.render_widget(gauge, area);
+}
+
+fn draw_status(frame: &mut Frame, app: &App, area: Rect) {
+    let [first, second] =
+        Layout::vertical([Constraint::Length(1), Constraint::Length(1)]).areas(area);
+    let stats = match &app.snapshot {
+        Some(snap) => {
+            let err = if snap.error.rmse.is_finite() {
+                format!(
+                    "est. error {:.4} (rel {:.3})",
+                    snap.error.rmse,
+                    snap.error.relative()
+                )
+            } else {
+                "est. error --".into()
+            };
+            let invalid = Span::styled(
+                format!("invalid {}", snap.stats.invalid),
+                if snap.stats.invalid > 0 {
+                    Style::new().red()
+                } else {
+                    Style::new()
+                },
+            );
+            Line::from(vec![
+                Span::raw(format!(
+                    " {} spp · {:.2} M samples/s · {err} · ",
+                    snap.stats.complete_passes,
+                    snap.stats.samples_per_second() / 1e6,
+                )),
+                invalid,
+            ])
+        }
+        None => Line::from(""),
+    };
+    frame.render_widget(stats, first);
+    let mut spans = Vec::new();
+    if let Some(p) = &app.worker_panic {
+        spans.push(Span::styled(
+            format!(" render thread panicked: {p} (r restarts) "),
+            Style::new().white().on_red(),
+        ));
+    }
+    match &app.message {
+        Some(Message::Info(m)) => spans.push(Span::styled(format!(" {m} "), Style::new().green())),
+        Some(Message::Error(m)) => spans.push(Span::styled(format!(" {m} "), Style::new().red())),
+        None => {}
+    }
+    spans.push(Span::raw(format!(" {}", app.report)).dark_gray());
+    frame.render_widget(Line::from(spans), second);
+}
+
+/// Decade tick labels for a log10 axis from `lo` to `hi` (both integers).
+fn decade_labels(lo: f64, hi: f64, unit: &str) -> Vec<Span<'static>> {
+    let (lo, hi) = (lo as i32, hi as i32);
+    let mid = lo + (hi - lo) / 2;
+    let mut ks = vec![lo];
+    if mid != lo && mid != hi {
+        ks.push(mid);
+    }
+    if hi != lo {
+        ks.push(hi);
+    }
+    ks.into_iter()
+        .map(|k| {
+            let v = 10f64.powi(k);
+            let text = if (-3..=3).contains(&k) {
+                format!("{v}{unit}")
+            } else {
+                format!("1e{k}{unit}")
+            };
+            Span::raw(text)
+        })
+        .collect()
+}
+
+/// Estimated RMSE against render time on log-log axes, with a 1/sqrt(t) guide through the
+/// first point: an unbiased estimator's error follows the guide's slope.
+fn draw_chart(frame: &mut Frame, app: &App, area: Rect) {
+    let block = Block::new()
+        .borders(Borders::TOP)
+        .title(" est. error vs time (log-log, g hides) ")
+        .border_style(Style::new().dark_gray());
+    let pts: Vec<(f64, f64)> = app
+        .history
+        .iter()
+        .map(|&(t, e)| (t.log10(), e.log10()))
+        .collect();
+    if pts.len() < 2 {
+        frame.render_widget(
+            Paragraph::new("collecting error estimates…")
+                .dark_gray()
+                .block(block),
+            area,
+        );
+        return;
+    }
+    let (x0, y0) = pts[0];
+    let x_hi = pts.iter().map(|p| p.0).fold(f64::MIN, f64::max);
+    let guide = [(x0, y0), (x_hi, y0 - 0.5 * (x_hi - x0))];
+    let (y_lo, y_hi) = pts
+        .iter()
+        .chain(guide.iter())
+        .fold((f64::MAX, f64::MIN), |(lo, hi), p| {
+            (lo.min(p.1), hi.max(p.1))
+        });
+    // Whole decades, an even number of them: ratatui spaces labels evenly, so the middle
+    // label must sit at a whole decade too.
+    let decades = |lo: f64, hi: f64| {
+        let (lo, hi) = (lo.floor(), hi.ceil().max(lo.floor() + 1.0));
+        [lo, hi + (hi - lo) % 2.0]
+    };
+    let xb = decades(x0, x_hi);
+    let yb = decades(y_lo, y_hi);
+    let datasets = vec![
+        Dataset::default()
+            .name("1/sqrt(t)")
+            .marker(Marker::Braille)
+            .graph_type(GraphType::Line)
+            .style(Style::new().dark_gray())
+            .data(&guide),
+        Dataset::default()
+            .name("est. RMSE")
+            .marker(Marker::Braille)
+            .graph_type(GraphType::Line)
+            .style(Style::new().cyan())
+            .data(&pts),
+    ];
+    let chart = Chart::new(datasets)
+        .block(block)
+        .x_axis(
+            Axis::default()
+                .bounds(xb)
+                .labels(decade_labels(xb[0], xb[1], "s"))
+                .style(Style::new().dark_gray()),
+        )
+        .y_axis(
+            Axis::default()
+                .bounds(yb)
+                .labels(decade_labels(yb[0], yb[1], ""))
+                .style(Style::new().dark_gray()),
+        );
+    frame.render_widget(chart, area);
+}
+
+const HELP: &[(&str, &str)] = &[
+    ("Tab / Shift-Tab", "select a form field"),
+    (
+        "Enter",
+        "edit the field (integrator, tonemap, colour cycle)",
+    ),
+    (
+        "Enter / Esc",
+        "while editing: apply / cancel (Ctrl-U clears)",
+    ),
+    ("space", "pause / resume the render"),
+    ("r", "restart the render from zero samples"),
+    ("s / e", "save the full-resolution PNG / linear EXR"),
+    ("+ / -  0", "zoom in (down to 1:1) / out, fit"),
+    ("arrows / hjkl", "pan the zoomed preview"),
+    ("c", "toggle truecolor / 256 colours"),
+    ("f", "toggle half-blocks / spaces only"),
+    ("g", "toggle the error-vs-time chart"),
+    ("?", "this help (any key closes it)"),
+    ("q / Esc / Ctrl-C", "quit"),
+];
+
+fn draw_help(frame: &mut Frame, area: Rect) {
+    let w = 70.min(area.width);
+    let h = (HELP.len() as u16 + 2).min(area.height);
+    let popup = Rect::new(
+        area.x + (area.width - w) / 2,
+        area.y + (area.height - h) / 2,
+        w,
+        h,
+    );
+    let lines: Vec<Line> = HELP
+        .iter()
+        .map(|(k, what)| {
+            Line::from(vec![
+                Span::styled(format!(" {k:<17}"), Style::new().bold().yellow()),
+                Span::raw(*what),
+            ])
+        })
+        .collect();
+    frame.render_widget(Clear, popup);
+    frame.render_widget(
+        Paragraph::new(lines).block(
+            Block::bordered()
+                .title(" keys ")
+                .style(Style::new().add_modifier(Modifier::empty())),
+        ),
+        popup,
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::ErrorEstimate;
+    use crate::render::RenderStats;
+    use crate::settings::SettingsOverrides;
+    use crate::tui::color::{ColorChoice, ColorMode};
+    use crate::tui::worker::{Snapshot, WorkerEvent};
+    use ratatui::backend::TestBackend;
+    use ratatui::Terminal;
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    /// An app showing a synthetic 64x48 film (a gradient with a bright disc) at 32 of 128 spp
+    /// after 2 s: everything the view shows is fixed, nothing depends on the clock.
+    fn app(w: u16, h: u16) -> App {
+        let cli = SettingsOverrides {
+            width: Some(64),
+            height: Some(48),
+            spp: Some(128),
+            ..Default::default()
+        };
+        let mut app = App::new(
+            "cornell".into(),
+            cli,
+            ColorChoice::Auto,
+            ColorMode::Ansi256,
+            true,
+        );
+        app.threads = 2;
+        app.on_worker(WorkerEvent::Started {
+            request: 0,
+            job: 1,
+            restarted: true,
+            settings: app.settings(),
+            scene_render: SettingsOverrides::default(),
+            scene_name: "cornell".into(),
+            report: "accel: flat; light sampling: power".into(),
+            threads: 2,
+        });
+        let (fw, fh) = (64u32, 48u32);
+        let mut rgb = Vec::new();
+        for y in 0..fh {
+            for x in 0..fw {
+                let (dx, dy) = (x as f32 - 32.0, y as f32 - 20.0);
+                let disc = if dx * dx + dy * dy < 100.0 { 1.0 } else { 0.0 };
+                rgb.extend([x as f32 / 64.0, y as f32 / 48.0, disc]);
+            }
+        }
+        let snap = Snapshot {
+            job: 1,
+            width: fw,
+            height: fh,
+            rgb,
+            stats: RenderStats {
+                passes: 32,
+                complete_passes: 32,
+                samples: 32 * 64 * 48,
+                invalid: 0,
+                elapsed: Duration::from_secs(2),
+            },
+            error: ErrorEstimate {
+                rmse: 0.0123,
+                rel_mse: 0.0009,
+            },
+            target_spp: 128,
+            status: JobStatus::Running,
+        };
+        app.on_worker(WorkerEvent::Progress(Arc::new(snap)));
+        app.resize(w, h);
+        app
+    }
+
+    fn render(app: &App) -> Terminal<TestBackend> {
+        let mut t = Terminal::new(TestBackend::new(app.size.width, app.size.height)).unwrap();
+        t.draw(|f| draw(f, app)).unwrap();
+        t
+    }
+
+    #[test]
+    fn main_layout() {
+        let app = app(80, 24);
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn help_overlay() {
+        let mut app = app(80, 24);
+        app.show_help = true;
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn smallest_supported_terminal() {
+        let app = app(MIN_WIDTH, MIN_HEIGHT);
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn error_chart_panel() {
+        let mut app = app(80, 24);
+        // RMSE falling as 1/sqrt(t) from 0.1 at 0.1 s to 0.001 at 1000 s.
+        app.history = (0..9)
+            .map(|k| {
+                let t = 10f64.powf(k as f64 / 2.0 - 1.0);
+                (t, 0.1 / (10.0 * t).sqrt())
+            })
+            .collect();
+        app.show_chart = true;
+        app.resize(80, 24);
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn too_small_terminal_says_so() {
+        let app = app(30, 8);
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn preview_keeps_the_film_aspect_ratio() {
+        // 64x48 film (4:3) in the 80x24 layout: count the cells holding image.
+        let app = app(80, 24);
+        let t = render(&app);
+        let area = layout(app.size, &app).preview.unwrap();
+        let buf = t.backend().buffer();
+        let (mut cols, mut rows) = (0, 0);
+        for y in area.top()..area.bottom() {
+            let n = (area.left()..area.right())
+                .filter(|&x| buf[(x, y)].symbol() == "▀")
+                .count();
+            if n > 0 {
+                rows += 1;
+                cols = cols.max(n);
+            }
+        }
+        // Two sub-pixels per row: width / (2 rows) = 4:3 within one cell of rounding.
+        let ratio = cols as f64 / (2.0 * rows as f64);
+        assert!((ratio - 4.0 / 3.0).abs() < 0.1, "{cols}x{rows}: {ratio}");
+    }
+}

@@ -1,0 +1,535 @@
+//! The render worker: one thread that owns the scene, the [`Renderer`] (and with it the film)
+//! and a dedicated rayon pool whose threads run at a lower priority (nice) than the UI.
+//!
+//! The UI talks to it through a command channel plus a shared cancel flag, and hears back on the
+//! UI's one event channel: [`WorkerEvent::Started`] when a request is accepted and throttled
+//! [`Snapshot`]s (copies of the film's mean, shared by `Arc`), so the UI never waits on a lock
+//! the render threads hold. The newest request wins: sending one raises the cancel flag, the
+//! running pass stops within a row, its threads are joined (`install` returns only when every
+//! task has), and the worker takes the newest command.
+
+use super::event::Event;
+use crate::film::ErrorEstimate;
+use crate::render::{PassOutcome, RenderError, RenderStats, Renderer};
+use crate::scene::{self, Scene};
+use crate::settings::{RenderSettings, SettingsOverrides};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// Nice value of the render threads: the UI thread (nice 0) always gets the CPU first.
+const RENDER_NICE: i32 = 10;
+
+/// What to render: a scene (file or built-in name) and the settings layers above the scene's
+/// own `[render]` table (CLI flags, then the TUI form).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Request {
+    pub id: u64,
+    pub scene: String,
+    pub layers: Vec<SettingsOverrides>,
+    /// Start a new film even if the current one could go on.
+    pub fresh: bool,
+}
+
+#[derive(Debug)]
+pub enum Command {
+    Start(Request),
+    Pause(bool),
+    Quit,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JobStatus {
+    Running,
+    Paused,
+    /// The target spp is reached.
+    Done,
+    /// The estimated relative error reached the target error.
+    TargetReached,
+}
+
+/// The film's state at one moment, shared with the UI (preview, save, status line).
+#[derive(Clone, Debug)]
+pub struct Snapshot {
+    /// Which render this is from (a new film gets a new job id).
+    pub job: u64,
+    pub width: u32,
+    pub height: u32,
+    /// Linear mean radiance, f32 RGB, row 0 at the top: exactly what `save_film` writes.
+    pub rgb: Vec<f32>,
+    pub stats: RenderStats,
+    pub error: ErrorEstimate,
+    pub target_spp: u32,
+    pub status: JobStatus,
+}
+
+// A few hundred bytes per event, a few events per second: boxing would buy nothing.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug)]
+pub enum WorkerEvent {
+    /// A request was accepted; `restarted` says whether a new film was started (or the current
+    /// one goes on, e.g. after raising the target spp).
+    Started {
+        request: u64,
+        job: u64,
+        restarted: bool,
+        settings: RenderSettings,
+        scene_render: SettingsOverrides,
+        scene_name: String,
+        report: String,
+        threads: usize,
+    },
+    Progress(Arc<Snapshot>),
+    /// A request could not start (scene error, invalid settings); the previous render goes on.
+    Failed {
+        request: u64,
+        message: String,
+    },
+    /// A render thread panicked; the render is dropped and the worker waits for a new request.
+    Panicked(String),
+}
+
+/// The UI's end of the worker.
+pub struct WorkerHandle {
+    tx: Sender<Command>,
+    cancel: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl WorkerHandle {
+    /// Start the worker thread; it sends snapshots at most every `min_interval` (plus one on
+    /// every status change).
+    pub fn spawn(events: Sender<Event>, min_interval: Duration) -> std::io::Result<Self> {
+        let (tx, rx) = mpsc::channel();
+        let cancel = Arc::new(AtomicBool::new(false));
+        let worker = Worker {
+            events,
+            rx,
+            cancel: cancel.clone(),
+            min_interval,
+            pool: None,
+            scene: None,
+            job: None,
+            next_job: 1,
+        };
+        let thread = std::thread::Builder::new()
+            .name("ptui-worker".into())
+            .spawn(move || worker.run())?;
+        Ok(WorkerHandle {
+            tx,
+            cancel,
+            thread: Some(thread),
+        })
+    }
+
+    /// Queue a command and interrupt the running pass so it is taken promptly.
+    pub fn send(&self, cmd: Command) {
+        // Send first, then cancel: the worker clears the flag before draining the queue, so a
+        // command is never left waiting behind a full pass.
+        let _ = self.tx.send(cmd);
+        self.cancel.store(true, Ordering::SeqCst);
+    }
+
+    /// Stop the render and join the worker.
+    pub fn shutdown(mut self) {
+        self.send(Command::Quit);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+struct Job {
+    id: u64,
+    renderer: Renderer,
+    status: JobStatus,
+    last_sent: Option<Instant>,
+}
+
+struct Worker {
+    events: Sender<Event>,
+    rx: Receiver<Command>,
+    cancel: Arc<AtomicBool>,
+    min_interval: Duration,
+    /// The pool and the thread count it was built for (0 = one per core).
+    pool: Option<(usize, Arc<rayon::ThreadPool>)>,
+    scene: Option<(String, Arc<Scene>)>,
+    job: Option<Job>,
+    next_job: u64,
+}
+
+/// Build a rayon pool whose threads lower their own priority as they start.
+pub fn niced_pool(threads: usize) -> Result<Arc<rayon::ThreadPool>, RenderError> {
+    Ok(Arc::new(
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("ptui-render-{i}"))
+            .start_handler(|_| lower_thread_priority(RENDER_NICE))
+            .build()?,
+    ))
+}
+
+/// Renice the calling thread (Linux keeps a nice value per thread).
+#[cfg(target_os = "linux")]
+fn lower_thread_priority(nice: i32) {
+    // SAFETY: gettid and setpriority take plain integers and touch no memory of ours; on
+    // Linux, PRIO_PROCESS with a thread id changes the nice value of that thread only.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        libc::setpriority(libc::PRIO_PROCESS, tid, nice);
+    }
+}
+
+/// Elsewhere setpriority would renice the whole process, UI included: leave priorities alone.
+#[cfg(not(target_os = "linux"))]
+fn lower_thread_priority(_nice: i32) {}
+
+impl Worker {
+    fn run(mut self) {
+        loop {
+            let running = self
+                .job
+                .as_ref()
+                .is_some_and(|j| j.status == JobStatus::Running);
+            if !running {
+                match self.rx.recv() {
+                    Ok(cmd) => {
+                        if !self.guarded(|w| w.handle(cmd)) {
+                            return;
+                        }
+                    }
+                    Err(_) => return,
+                }
+            }
+            self.cancel.store(false, Ordering::SeqCst);
+            while let Ok(cmd) = self.rx.try_recv() {
+                if !self.guarded(|w| w.handle(cmd)) {
+                    return;
+                }
+            }
+            self.guarded(|w| {
+                w.step();
+                true
+            });
+        }
+    }
+
+    /// Run `f`, turning a panic (here or in a render thread, which rayon re-raises here) into a
+    /// message for the UI; the render is dropped, the worker lives on.
+    fn guarded(&mut self, f: impl FnOnce(&mut Self) -> bool) -> bool {
+        match catch_unwind(AssertUnwindSafe(|| f(self))) {
+            Ok(go_on) => go_on,
+            Err(payload) => {
+                self.job = None;
+                let msg = super::term::panic_message(&*payload);
+                let _ = self.events.send(Event::Render(WorkerEvent::Panicked(msg)));
+                true
+            }
+        }
+    }
+
+    fn send(&self, ev: WorkerEvent) {
+        let _ = self.events.send(Event::Render(ev));
+    }
+
+    /// Apply one command; false means quit.
+    fn handle(&mut self, cmd: Command) -> bool {
+        match cmd {
+            Command::Quit => return false,
+            Command::Pause(pause) => {
+                if let Some(job) = &mut self.job {
+                    let new = match (job.status, pause) {
+                        (JobStatus::Running, true) => JobStatus::Paused,
+                        (JobStatus::Paused, false) => JobStatus::Running,
+                        (s, _) => s,
+                    };
+                    if new != job.status {
+                        job.status = new;
+                        self.snapshot(true);
+                    }
+                }
+            }
+            Command::Start(req) => {
+                if let Err(message) = self.start(&req) {
+                    self.send(WorkerEvent::Failed {
+                        request: req.id,
+                        message,
+                    });
+                }
+            }
+        }
+        true
+    }
+
+    /// Load the scene if it changed, merge the settings, and either go on with the current film
+    /// (only the stopping rule or display settings changed) or start a new one.
+    fn start(&mut self, req: &Request) -> Result<(), String> {
+        let scene = match &self.scene {
+            Some((spec, s)) if *spec == req.scene => s.clone(),
+            _ => {
+                let s = Arc::new(scene::load(&req.scene).map_err(|e| e.to_string())?);
+                self.scene = Some((req.scene.clone(), s.clone()));
+                s
+            }
+        };
+        let mut layers: Vec<&SettingsOverrides> = vec![&scene.render];
+        layers.extend(req.layers.iter());
+        let settings = RenderSettings::merged(&layers);
+        settings.validate()?;
+
+        let continues = !req.fresh
+            && self.job.as_ref().is_some_and(|j| {
+                Arc::ptr_eq(&j.renderer.scene, &scene)
+                    && same_image(&j.renderer.settings, &settings)
+                    && j.renderer.stats().complete_passes > 0
+            });
+        let restarted = !continues;
+        if continues {
+            let job = self.job.as_mut().expect("checked above");
+            job.renderer.settings = settings.clone();
+            job.status = JobStatus::Running;
+        } else {
+            let pool = match &self.pool {
+                Some((n, p)) if *n == settings.threads => p.clone(),
+                _ => {
+                    // The old job keeps its own pool alive until it is replaced below, so a
+                    // failure here leaves the current render running.
+                    let p = niced_pool(settings.threads).map_err(|e| e.to_string())?;
+                    self.pool = Some((settings.threads, p.clone()));
+                    p
+                }
+            };
+            let renderer = Renderer::with_pool(scene.clone(), settings.clone(), pool)
+                .map_err(|e| e.to_string())?;
+            self.job = Some(Job {
+                id: self.next_job,
+                renderer,
+                status: JobStatus::Running,
+                last_sent: None,
+            });
+            self.next_job += 1;
+        }
+        let job = self.job.as_ref().expect("set above");
+        self.send(WorkerEvent::Started {
+            request: req.id,
+            job: job.id,
+            restarted,
+            settings,
+            scene_render: scene.render.clone(),
+            scene_name: scene.name.clone(),
+            report: scene.report.to_string(),
+            threads: job.renderer.threads(),
+        });
+        self.update_status();
+        self.snapshot(true);
+        Ok(())
+    }
+
+    /// Done or target error reached, from the current counters.
+    fn update_status(&mut self) {
+        let Some(job) = &self.job else { return };
+        if job.status != JobStatus::Running {
+            return;
+        }
+        // The renderer checks the target error after every complete pass, on its own pool.
+        let reached = if job.renderer.target_error_reached() {
+            Some(JobStatus::TargetReached)
+        } else if job.renderer.done() {
+            Some(JobStatus::Done)
+        } else {
+            None
+        };
+        if let (Some(status), Some(job)) = (reached, &mut self.job) {
+            job.status = status;
+        }
+    }
+
+    /// Run `f` on the render pool, so rayon's global pool (full priority) is never used.
+    fn on_pool<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        match &self.pool {
+            Some((_, p)) => p.install(f),
+            None => f(),
+        }
+    }
+
+    /// One pass, then a snapshot if one is due.
+    fn step(&mut self) {
+        let Some(job) = &mut self.job else { return };
+        if job.status != JobStatus::Running {
+            return;
+        }
+        if job.renderer.run_pass(&self.cancel) == PassOutcome::Cancelled {
+            return;
+        }
+        self.update_status();
+        let changed = self
+            .job
+            .as_ref()
+            .is_some_and(|j| j.status != JobStatus::Running);
+        self.snapshot(changed);
+    }
+
+    /// Send a snapshot if forced or the last one is older than the minimum interval.
+    fn snapshot(&mut self, force: bool) {
+        let Some(job) = &mut self.job else { return };
+        let due = job
+            .last_sent
+            .is_none_or(|t| t.elapsed() >= self.min_interval);
+        if !(force || due) {
+            return;
+        }
+        job.last_sent = Some(Instant::now());
+        let Some(job) = &self.job else { return };
+        let film = job.renderer.film();
+        let stratified = job.renderer.settings.sampler.is_stratified();
+        let (rgb, error) = self.on_pool(|| (film.mean_rgb_f32(), film.error_estimate(stratified)));
+        let snap = Snapshot {
+            job: job.id,
+            width: film.width,
+            height: film.height,
+            rgb,
+            stats: job.renderer.stats(),
+            error,
+            target_spp: job.renderer.settings.spp,
+            status: job.status,
+        };
+        self.send(WorkerEvent::Progress(Arc::new(snap)));
+    }
+}
+
+/// Whether two settings produce the same film (they may differ in when to stop and in how the
+/// film is displayed).
+fn same_image(a: &RenderSettings, b: &RenderSettings) -> bool {
+    let strip = |s: &RenderSettings| RenderSettings {
+        spp: 0,
+        target_error: None,
+        exposure: 1.0,
+        tonemap: Default::default(),
+        ..s.clone()
+    };
+    strip(a) == strip(b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::IntegratorKind;
+
+    fn request(id: u64, spp: u32, integrator: IntegratorKind) -> Request {
+        Request {
+            id,
+            scene: "cornell".into(),
+            layers: vec![SettingsOverrides {
+                width: Some(16),
+                height: Some(12),
+                spp: Some(spp),
+                integrator: Some(integrator),
+                threads: Some(1),
+                ..Default::default()
+            }],
+            fresh: false,
+        }
+    }
+
+    /// Wait for the next snapshot with the given status (the worker's events come in order).
+    fn until(rx: &Receiver<Event>, want: JobStatus) -> Arc<Snapshot> {
+        loop {
+            match rx.recv_timeout(Duration::from_secs(120)) {
+                Ok(Event::Render(WorkerEvent::Progress(s))) if s.status == want => return s,
+                Ok(Event::Render(WorkerEvent::Failed { message, .. })) => panic!("{message}"),
+                Ok(_) => {}
+                Err(e) => panic!("no {want:?} snapshot: {e}"),
+            }
+        }
+    }
+
+    #[test]
+    fn raising_spp_continues_and_a_new_integrator_restarts() {
+        let (tx, rx) = mpsc::channel();
+        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        worker.send(Command::Start(request(1, 2, IntegratorKind::Path)));
+        let first = until(&rx, JobStatus::Done);
+        assert_eq!(first.stats.complete_passes, 2);
+        worker.send(Command::Start(request(2, 4, IntegratorKind::Path)));
+        let more = until(&rx, JobStatus::Done);
+        assert_eq!((more.job, more.stats.complete_passes), (first.job, 4));
+        worker.send(Command::Start(request(3, 4, IntegratorKind::Naive)));
+        let new = until(&rx, JobStatus::Done);
+        assert_ne!(new.job, first.job);
+        assert_eq!(new.stats.complete_passes, 4);
+        worker.shutdown();
+    }
+
+    #[test]
+    fn a_new_request_cancels_a_long_render() {
+        let (tx, rx) = mpsc::channel();
+        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        // 64x48 at a million spp would take hours: only cancelling lets the next one run.
+        let mut long = request(1, 1_000_000, IntegratorKind::Path);
+        long.layers[0].width = Some(64);
+        long.layers[0].height = Some(48);
+        worker.send(Command::Start(long));
+        let first = until(&rx, JobStatus::Running);
+        worker.send(Command::Start(request(2, 2, IntegratorKind::Naive)));
+        let next = until(&rx, JobStatus::Done);
+        assert_ne!(next.job, first.job);
+        assert_eq!((next.width, next.stats.complete_passes), (16, 2));
+        worker.shutdown();
+    }
+
+    #[test]
+    fn a_bad_scene_fails_the_request_only() {
+        let (tx, rx) = mpsc::channel();
+        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let mut req = request(7, 1, IntegratorKind::Path);
+        req.scene = "no-such-scene".into();
+        worker.send(Command::Start(req));
+        match rx.recv_timeout(Duration::from_secs(60)) {
+            Ok(Event::Render(WorkerEvent::Failed { request, message })) => {
+                assert_eq!(request, 7);
+                assert!(message.contains("no-such-scene"), "{message}");
+            }
+            other => panic!("expected a failure, got {other:?}"),
+        }
+        worker.shutdown();
+    }
+
+    #[test]
+    fn target_error_stops_the_render() {
+        let (tx, rx) = mpsc::channel();
+        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let mut req = request(1, 1000, IntegratorKind::Path);
+        // A relative error of 0.5 is reached within a few passes on 16x12 pixels.
+        req.layers[0].target_error = Some(0.5);
+        worker.send(Command::Start(req));
+        let snap = until(&rx, JobStatus::TargetReached);
+        assert!(snap.error.relative() <= 0.5, "{:?}", snap.error);
+        assert!(snap.stats.complete_passes < 1000);
+        worker.shutdown();
+    }
+
+    #[test]
+    fn a_panic_is_reported_and_the_worker_goes_on() {
+        let (tx, rx) = mpsc::channel();
+        let (_cmd_tx, cmd_rx) = mpsc::channel();
+        let mut worker = Worker {
+            events: tx,
+            rx: cmd_rx,
+            cancel: Arc::new(AtomicBool::new(false)),
+            min_interval: Duration::ZERO,
+            pool: None,
+            scene: None,
+            job: None,
+            next_job: 1,
+        };
+        let go_on = worker.guarded(|_| panic!("boom in a render thread"));
+        assert!(go_on);
+        match rx.try_recv() {
+            Ok(Event::Render(WorkerEvent::Panicked(msg))) => assert!(msg.contains("boom"), "{msg}"),
+            other => panic!("expected a panic report, got {other:?}"),
+        }
+    }
+}
