@@ -6,6 +6,7 @@ fn main() {
     let cli = Cli::parse();
     let result = match &cli.command {
         Some(Command::Render(args)) => cli::render::run(args),
+        Some(Command::Bench(args)) => cli::bench::run(args),
         Some(Command::Scenes) => {
             for name in builtin::names() {
                 println!("{name}");
@@ -18,6 +19,7 @@ fn main() {
             settings: cli.settings.clone(),
             output: "render.png".into(),
             quiet: false,
+            accel: None,
         }),
     };
     if let Err(e) = result {

@@ -1,5 +1,6 @@
 //! The command line: clap definitions and one module per subcommand. `main.rs` only dispatches.
 
+pub mod bench;
 pub mod render;
 
 use crate::settings::{IntegratorKind, SettingsOverrides, Tonemap};
@@ -27,6 +28,26 @@ pub enum Command {
     Render(RenderArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Measure parts of the renderer (`accel`: flat scan vs BVH by primitive count).
+    Bench(BenchArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    #[arg(value_enum)]
+    pub target: BenchTarget,
+    /// Largest primitive count of the sweep (1, 2, 4, ... up to this).
+    #[arg(long, default_value_t = 100_000)]
+    pub max_prims: usize,
+    /// Flat-scan primitive tests per measurement (sets the number of rays).
+    #[arg(long, default_value_t = 20_000_000)]
+    pub work: usize,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum BenchTarget {
+    /// Closest-hit throughput of the flat scan and the BVH, 1 to 100k primitives.
+    Accel,
 }
 
 #[derive(Args, Debug)]
@@ -41,6 +62,9 @@ pub struct RenderArgs {
     /// Print no progress bar.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Force the accelerator (default: the scene file's `accel`, else auto).
+    #[arg(long, value_enum)]
+    pub accel: Option<crate::accel::AccelChoice>,
 }
 
 /// Flags that override the scene file's `[render]` table.

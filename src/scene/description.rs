@@ -29,6 +29,14 @@ pub struct SceneDesc {
     pub background: Option<Rgb>,
     #[serde(default)]
     pub sphere: Vec<SphereDesc>,
+    /// Accelerator: auto (default), flat or bvh (see `accel`).
+    pub accel: Option<crate::accel::AccelChoice>,
+    #[serde(default)]
+    pub triangle: Vec<TriangleDesc>,
+    #[serde(default)]
+    pub quad: Vec<QuadDesc>,
+    #[serde(default)]
+    pub mesh: Vec<MeshDesc>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -83,6 +91,77 @@ impl SphereDesc {
         }
     }
 }
+
+/// `[[triangle]]`: one triangle; the front side sees the vertices counter-clockwise.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleDesc {
+    pub name: Option<Spanned<String>>,
+    pub vertices: Spanned<[V3; 3]>,
+    pub material: Option<MaterialName>,
+    pub color: Option<Albedo>,
+    pub emission: Option<Rgb>,
+    pub ior: Option<Spanned<Positive>>,
+}
+
+/// `[[quad]]`: the parallelogram corner, corner + edge1, corner + edge1 + edge2, corner + edge2
+/// (two triangles; the front side is the one edge1 x edge2 points to).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct QuadDesc {
+    pub name: Option<Spanned<String>>,
+    pub corner: V3,
+    pub edge1: V3,
+    pub edge2: Spanned<V3>,
+    pub material: Option<MaterialName>,
+    pub color: Option<Albedo>,
+    pub emission: Option<Rgb>,
+    pub ior: Option<Spanned<Positive>>,
+}
+
+/// `[[mesh]]`: triangles from a Wavefront OBJ file (`path`, relative to the scene file) or from
+/// a built-in generator (`torus_knot`), placed by scale, then rotation (degrees about x, then
+/// y, then z), then translation.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDesc {
+    pub name: Option<Spanned<String>>,
+    pub path: Option<Spanned<String>>,
+    pub torus_knot: Option<Spanned<TorusKnotDesc>>,
+    pub translate: Option<V3>,
+    pub scale: Option<Positive>,
+    pub rotate: Option<V3>,
+    pub material: Option<MaterialName>,
+    pub color: Option<Albedo>,
+    pub emission: Option<Rgb>,
+    pub ior: Option<Spanned<Positive>>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TorusKnotDesc {
+    pub p: u32,
+    pub q: u32,
+    pub segments: u32,
+    pub sides: u32,
+    pub tube: Positive,
+}
+
+macro_rules! material_of {
+    ($($t:ty),*) => {$(
+        impl $t {
+            pub fn material(&self) -> MaterialDesc {
+                MaterialDesc {
+                    material: self.material,
+                    color: self.color,
+                    emission: self.emission,
+                    ior: self.ior.clone(),
+                }
+            }
+        }
+    )*};
+}
+material_of!(TriangleDesc, QuadDesc, MeshDesc);
 
 /// A finite 3-vector.
 #[derive(Clone, Copy, Debug, PartialEq)]
