@@ -41,8 +41,7 @@ fn rays(count: usize, seed: u64) -> Vec<(Ray, f64)> {
     (0..count)
         .map(|_| {
             // Origins inside and outside the unit cube; axis-aligned directions now and then.
-            let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 3.0
-                - DVec3::ONE;
+            let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 3.0 - DVec3::ONE;
             let mut d = warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
             if rng.next_f64() < 0.1 {
                 d = [DVec3::X, -DVec3::Y, DVec3::Z][(rng.next_u64() % 3) as usize];

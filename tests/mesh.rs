@@ -4,7 +4,7 @@
 use ptui::accel::AccelChoice;
 use ptui::render::Renderer;
 use ptui::scene::{self, BuildOptions, SceneError};
-use ptui::settings::{RenderSettings, SettingsOverrides};
+use ptui::settings::{IntegratorKind, RenderSettings, SettingsOverrides};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -18,7 +18,11 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 /// Write `scene.toml` with a mesh entry pointing at `obj` (relative) and `obj`'s contents.
-fn scene_with_obj(dir: &PathBuf, obj_name: &str, obj: Option<&str>) -> Result<scene::Scene, SceneError> {
+fn scene_with_obj(
+    dir: &PathBuf,
+    obj_name: &str,
+    obj: Option<&str>,
+) -> Result<scene::Scene, SceneError> {
     if let Some(text) = obj {
         std::fs::write(dir.join(obj_name), text).expect("write obj");
     }
@@ -49,8 +53,14 @@ fn obj_error(name: &str, obj: Option<&str>) -> String {
         .err()
         .unwrap_or_else(|| panic!("{name}: expected an error"));
     let text = err.to_string();
-    assert!(text.contains("m.obj"), "{name}: error does not name the file: {text}");
-    assert!(text.contains("scene.toml:"), "{name}: no scene location: {text}");
+    assert!(
+        text.contains("m.obj"),
+        "{name}: error does not name the file: {text}"
+    );
+    assert!(
+        text.contains("scene.toml:"),
+        "{name}: no scene location: {text}"
+    );
     assert!(text.contains("mesh[0].path"), "{name}: no field: {text}");
     text
 }
@@ -61,7 +71,10 @@ fn obj_errors_name_the_file_and_the_problem() {
     assert!(missing.contains("cannot read OBJ file"), "{missing}");
     let dir = temp_dir("dir");
     std::fs::create_dir_all(dir.join("m.obj")).unwrap();
-    let text = scene_with_obj(&dir, "m.obj", None).err().unwrap().to_string();
+    let text = scene_with_obj(&dir, "m.obj", None)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(text.contains("directory"), "{text}");
     let malformed = obj_error("malformed", Some("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 x 3\n"));
     assert!(malformed.contains("invalid OBJ"), "{malformed}");
@@ -73,15 +86,21 @@ fn obj_errors_name_the_file_and_the_problem() {
 
 #[test]
 fn too_many_triangles_is_an_error_before_generating_them() {
-    let src = "[[mesh]]\ntorus_knot = { p = 2, q = 3, segments = 100000, sides = 100, tube = 0.3 }\n";
+    let src =
+        "[[mesh]]\ntorus_knot = { p = 2, q = 3, segments = 100000, sides = 100, tube = 0.3 }\n";
     let err = scene::load_str(src, "big.toml").err().expect("too big");
     let text = err.to_string();
-    assert!(text.contains("20000000 triangles") && text.contains("big.toml:2"), "{text}");
+    assert!(
+        text.contains("20000000 triangles") && text.contains("big.toml:2"),
+        "{text}"
+    );
 }
 
 #[test]
 fn mesh_entries_need_exactly_one_source() {
-    let err = scene::load_str("[[mesh]]\ncolor = 0.5\n", "none.toml").err().unwrap();
+    let err = scene::load_str("[[mesh]]\ncolor = 0.5\n", "none.toml")
+        .err()
+        .unwrap();
     assert!(err.to_string().contains("needs `path`"), "{err}");
     let both = "[[mesh]]\npath = \"a.obj\"\ntorus_knot = { p = 2, q = 3, segments = 8, sides = 4, tube = 0.3 }\n";
     let err = scene::load_str(both, "both.toml").err().unwrap();
@@ -92,10 +111,16 @@ fn mesh_entries_need_exactly_one_source() {
 fn degenerate_triangles_and_quads_are_rejected_with_a_location() {
     let src = "[[triangle]]\nvertices = [[0, 0, 0], [1, 1, 1], [2, 2, 2]]\n";
     let err = scene::load_str(src, "t.toml").err().unwrap().to_string();
-    assert!(err.contains("t.toml:2") && err.contains("collinear"), "{err}");
+    assert!(
+        err.contains("t.toml:2") && err.contains("collinear"),
+        "{err}"
+    );
     let src = "[[quad]]\ncorner = [0, 0, 0]\nedge1 = [1, 0, 0]\nedge2 = [2, 0, 0]\n";
     let err = scene::load_str(src, "q.toml").err().unwrap().to_string();
-    assert!(err.contains("q.toml:4") && err.contains("parallel"), "{err}");
+    assert!(
+        err.contains("q.toml:4") && err.contains("parallel"),
+        "{err}"
+    );
 }
 
 fn render(spec: &str, accel: AccelChoice, w: u32, h: u32, spp: u32) -> Vec<f32> {
@@ -145,7 +170,58 @@ fn scene_without_emitters_renders_the_background_without_nan() {
 #[test]
 fn builtin_scenes_report_their_accelerator() {
     let cornell = scene::load("cornell").unwrap();
-    assert!(cornell.report.accel.starts_with("flat scan"), "{}", cornell.report.accel);
+    assert!(
+        cornell.report.accel.starts_with("flat scan"),
+        "{}",
+        cornell.report.accel
+    );
     let field = scene::load("spheres-field").unwrap();
-    assert!(field.report.accel.starts_with("BVH"), "{}", field.report.accel);
+    assert!(
+        field.report.accel.starts_with("BVH"),
+        "{}",
+        field.report.accel
+    );
+}
+
+/// Mean image brightness and a conservative standard error of it (channels treated as fully
+/// correlated), for one integrator.
+fn mean_and_error(spec: &str, integrator: IntegratorKind, size: u32, spp: u32) -> (f64, f64) {
+    let scene = Arc::new(scene::load(spec).expect("scene"));
+    let settings = RenderSettings::merged(&[
+        &scene.render,
+        &SettingsOverrides {
+            width: Some(size),
+            height: Some(size),
+            spp: Some(spp),
+            threads: Some(2),
+            integrator: Some(integrator),
+            seed: Some(7),
+            ..Default::default()
+        },
+    ]);
+    let mut r = Renderer::new(scene, settings).expect("renderer");
+    r.render(&AtomicBool::new(false), |_| true);
+    assert_eq!(r.stats().invalid, 0);
+    let mean = r.film().mean_rgb_f32();
+    let se = r.film().std_error_f32();
+    let n = se.len() as f64;
+    let m = mean.iter().map(|v| *v as f64).sum::<f64>() / mean.len() as f64;
+    let var: f64 = se.iter().map(|s| (*s as f64).powi(2)).sum::<f64>() / (n * n);
+    (m, var.sqrt())
+}
+
+/// Light sampling of quad lights with MIS (path) and pure BSDF sampling (naive) estimate the
+/// same image: a wrong area-to-solid-angle pdf, a one-sided/two-sided mismatch or a wrong MIS
+/// weight would shift the path integrator's mean.
+#[test]
+fn path_and_naive_agree_on_the_quad_light_cornell_box() {
+    let (p, sp) = mean_and_error("cornell-mesh", IntegratorKind::Path, 24, 128);
+    let (q, sq) = mean_and_error("cornell-mesh", IntegratorKind::Naive, 24, 1024);
+    let tol = 4.0 * (sp * sp + sq * sq).sqrt();
+    eprintln!("path {p} +- {sp}, naive {q} +- {sq}");
+    assert!(
+        (p - q).abs() < tol,
+        "path {p} vs naive {q}: differ by {} > {tol}",
+        (p - q).abs()
+    );
 }

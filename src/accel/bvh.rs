@@ -275,10 +275,7 @@ impl Bvh {
             }
         }
         if visited != self.nodes.len() {
-            return Err(format!(
-                "{} nodes, {visited} reachable",
-                self.nodes.len()
-            ));
+            return Err(format!("{} nodes, {visited} reachable", self.nodes.len()));
         }
         match seen.iter().position(|&c| c != 1) {
             Some(p) => Err(format!("primitive {p} is in {} leaves", seen[p])),
@@ -363,16 +360,16 @@ fn build_node(prims: &mut [BuildPrim], first: usize, depth: usize, nodes: &mut V
         acc_n += count[i];
         cost[i - 1] += acc_n as f64 * acc_b.half_area();
     }
-    let (best, best_cost) = cost
-        .iter()
-        .enumerate()
-        .fold((0, f64::INFINITY), |(bi, bc), (i, &c)| {
+    let (best, best_cost) = cost.iter().enumerate().fold(
+        (0, f64::INFINITY),
+        |(bi, bc), (i, &c)| {
             if c < bc {
                 (i, c)
             } else {
                 (bi, bc)
             }
-        });
+        },
+    );
     let area = bounds.half_area();
     let split_cost = TRAVERSAL_COST + if area > 0.0 { best_cost / area } else { 0.0 };
     if n <= MAX_LEAF && n as f64 <= split_cost {

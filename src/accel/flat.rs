@@ -21,5 +21,7 @@ pub fn intersect(prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<Hit> {
 /// Whether any primitive is hit in (0, t_max).
 #[inline]
 pub fn any_hit(prims: &[Primitive], ray: &Ray, t_max: f64) -> bool {
-    prims.iter().any(|p| p.shape.intersect(ray, t_max).is_some())
+    prims
+        .iter()
+        .any(|p| p.shape.intersect(ray, t_max).is_some())
 }

@@ -16,9 +16,9 @@ pub mod bench;
 pub mod bvh;
 pub mod flat;
 
+use crate::camera::Camera;
 use crate::geometry::Hit;
 use crate::math::Ray;
-use crate::camera::Camera;
 use crate::scene::Primitive;
 use serde::Deserialize;
 

@@ -159,26 +159,14 @@ impl Triangle {
                 let abs_sum =
                     (self.p[0] * b0).abs() + (self.p[1] * b1).abs() + (self.p[2] * b2).abs();
                 let err = gamma(7.0) * abs_sum.max_element();
-                Hit {
-                    t,
-                    p,
-                    n,
-                    prim,
-                    err,
-                }
+                Hit { t, p, n, prim, err }
             }
             None => {
                 // Unreachable for a t returned by `intersect`; stay safe with a looser bound
                 // (error of o + t d: a few ulps of |o| + t).
                 let p = ray.at(t);
                 let err = gamma(7.0) * (p.abs().max_element() + t);
-                Hit {
-                    t,
-                    p,
-                    n,
-                    prim,
-                    err,
-                }
+                Hit { t, p, n, prim, err }
             }
         }
     }
@@ -207,7 +195,9 @@ mod tests {
     fn hits_inside_misses_outside_and_respects_t_max() {
         let tri = unit();
         let down = |x: f64, y: f64| Ray::new(DVec3::new(x, y, 2.0), -DVec3::Z);
-        let h = tri.intersect_full(&down(0.25, 0.25), f64::INFINITY).unwrap();
+        let h = tri
+            .intersect_full(&down(0.25, 0.25), f64::INFINITY)
+            .unwrap();
         assert!((h.t - 2.0).abs() < 1e-15);
         assert!((h.b[1] - 0.25).abs() < 1e-15 && (h.b[2] - 0.25).abs() < 1e-15);
         assert!(tri.intersect(&down(0.6, 0.6), f64::INFINITY).is_none());
@@ -246,11 +236,7 @@ mod tests {
         for _ in 0..50_000 {
             let s = rng.next_f64();
             let target = a + (c - a) * s;
-            let o = DVec3::new(
-                rng.next_f64() * 4.0 - 2.0,
-                rng.next_f64() * 4.0 - 2.0,
-                -3.0,
-            );
+            let o = DVec3::new(rng.next_f64() * 4.0 - 2.0, rng.next_f64() * 4.0 - 2.0, -3.0);
             let r = Ray::new(o, (target - o).normalize());
             let hits = t1.intersect(&r, f64::INFINITY).is_some() as u32
                 + t2.intersect(&r, f64::INFINITY).is_some() as u32;
@@ -280,9 +266,8 @@ mod tests {
         for (size, offset) in [(1.0, 0.0), (1e-3, 0.0), (1.0, 1e6), (1e4, 1e5), (1e-2, 1e3)] {
             for _ in 0..5_000 {
                 let base = DVec3::splat(offset);
-                let mut v = || {
-                    base + DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * size
-                };
+                let mut v =
+                    || base + DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * size;
                 let tri = Triangle::new(v(), v(), v());
                 let Some(n) = tri.normal() else { continue };
                 let target = tri.point(0.3, 0.3);

@@ -7,8 +7,14 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "cornell-small-light",
         include_str!("../../scenes/cornell-small-light.toml"),
     ),
-    ("cornell-mesh", include_str!("../../scenes/cornell-mesh.toml")),
-    ("spheres-field", include_str!("../../scenes/spheres-field.toml")),
+    (
+        "cornell-mesh",
+        include_str!("../../scenes/cornell-mesh.toml"),
+    ),
+    (
+        "spheres-field",
+        include_str!("../../scenes/spheres-field.toml"),
+    ),
     ("torus-knot", include_str!("../../scenes/torus-knot.toml")),
 ];
 

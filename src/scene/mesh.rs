@@ -89,10 +89,7 @@ pub fn load_obj(path: &Path, limit: u64) -> Result<Vec<Triangle>, String> {
         Err(tobj::LoadError::OpenFileFailed)
     })
     .map_err(|e| format!("invalid OBJ file: {e}"))?;
-    let count: u64 = models
-        .iter()
-        .map(|m| m.mesh.indices.len() as u64 / 3)
-        .sum();
+    let count: u64 = models.iter().map(|m| m.mesh.indices.len() as u64 / 3).sum();
     if count > limit {
         return Err(format!(
             "has {count} triangles, more than the {limit} this scene has room for \
