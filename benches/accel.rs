@@ -3,7 +3,7 @@
 //! with the crossover; `accel::BVH_CROSSOVER` records the measured value.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use ptui::accel::{bench, flat, Bvh};
+use ptui::accel::{bench, flat::FlatScan, Bvh};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -22,10 +22,11 @@ fn closest_hit(c: &mut Criterion) {
         let prims = bench::random_prims(n, n as u64);
         let rays = bench::random_rays(RAYS, n as u64);
         let bvh = Bvh::build(&prims);
+        let flat = FlatScan::new(&prims);
         group.bench_with_input(BenchmarkId::new("flat", n), &n, |b, _| {
             b.iter(|| {
                 rays.iter()
-                    .filter(|r| flat::intersect(&prims, r, f64::INFINITY).is_some())
+                    .filter(|r| flat.intersect(&prims, r, f64::INFINITY).is_some())
                     .count()
             })
         });

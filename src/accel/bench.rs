@@ -1,8 +1,8 @@
 //! The measurement behind [`super::BVH_CROSSOVER`]: closest-hit throughput of the flat scan and
 //! of the BVH as the primitive count grows, on random scenes of spheres and triangles (half each)
-//! and random rays. Shared by `ptui bench accel`, `cargo bench --bench accel` and the tests.
+//! and random rays. The flat scan is the renderer's ([`FlatScan`]: spheres four at a time). Shared by `ptui bench accel`, `cargo bench --bench accel` and the tests.
 
-use super::{flat, Bvh};
+use super::{flat::FlatScan, Bvh};
 use crate::geometry::{Sphere, Triangle};
 use crate::math::{DVec3, Ray};
 use crate::sampling::{warp, Rng};
@@ -90,8 +90,9 @@ pub fn measure(n: usize, work: usize) -> Row {
     let rays = random_rays((work / n.max(1)).clamp(2_000, 200_000), n as u64);
     let bvh = Bvh::build(&prims);
     let build = bvh.build_time;
+    let flat = FlatScan::new(&prims);
     let flat_ns = time_per_ray(&rays, REPEATS, |r| {
-        flat::intersect(&prims, r, f64::INFINITY).is_some()
+        flat.intersect(&prims, r, f64::INFINITY).is_some()
     });
     let bvh_ns = time_per_ray(&rays, REPEATS, |r| {
         bvh.intersect(&prims, r, f64::INFINITY).is_some()

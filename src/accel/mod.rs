@@ -15,6 +15,7 @@
 pub mod bench;
 pub mod bvh;
 pub mod flat;
+pub mod lanes;
 
 use crate::camera::Camera;
 use crate::geometry::Hit;
@@ -52,8 +53,9 @@ pub enum AccelChoice {
 
 #[derive(Clone, Debug)]
 pub enum Accel {
-    /// Test every primitive: fastest for a handful of them (smallpt's nine spheres).
-    Flat,
+    /// Test every primitive: fastest for a handful of them (smallpt's nine spheres). Spheres
+    /// are tested four at a time from a structure-of-arrays copy.
+    Flat(flat::FlatScan),
     /// Bounding volume hierarchy: logarithmic in the primitive count.
     Bvh(Bvh),
 }
@@ -65,10 +67,10 @@ impl Accel {
     pub fn build(choice: AccelChoice, prims: &[Primitive], probe: &[Ray]) -> (Accel, String) {
         let n = prims.len();
         match choice {
-            AccelChoice::Flat => (Accel::Flat, "forced".into()),
+            AccelChoice::Flat => (Accel::Flat(flat::FlatScan::new(prims)), "forced".into()),
             AccelChoice::Bvh => (Accel::Bvh(Bvh::build(prims)), "forced".into()),
             AccelChoice::Auto if n < BVH_CROSSOVER => (
-                Accel::Flat,
+                Accel::Flat(flat::FlatScan::new(prims)),
                 format!("auto: below the measured crossover of {BVH_CROSSOVER}"),
             ),
             AccelChoice::Auto => {
@@ -85,7 +87,7 @@ impl Accel {
                         "auto: the boxes do not separate the objects; camera rays would cost \
                          {cost:.1} tests vs {n} flat"
                     );
-                    (Accel::Flat, why)
+                    (Accel::Flat(flat::FlatScan::new(prims)), why)
                 }
             }
         }
@@ -94,7 +96,7 @@ impl Accel {
     #[inline]
     pub fn intersect(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<Hit> {
         match self {
-            Accel::Flat => flat::intersect(prims, ray, t_max),
+            Accel::Flat(f) => f.intersect(prims, ray, t_max),
             Accel::Bvh(b) => b.intersect(prims, ray, t_max),
         }
     }
@@ -103,7 +105,7 @@ impl Accel {
     #[inline]
     pub fn any_hit(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> bool {
         match self {
-            Accel::Flat => flat::any_hit(prims, ray, t_max),
+            Accel::Flat(_) => flat::any_hit(prims, ray, t_max),
             Accel::Bvh(b) => b.any_hit(prims, ray, t_max),
         }
     }
@@ -111,7 +113,7 @@ impl Accel {
     /// Human-readable name for summaries and the TUI status line.
     pub fn describe(&self, prims: usize) -> String {
         match self {
-            Accel::Flat => format!("flat scan, {prims} objects"),
+            Accel::Flat(_) => format!("flat scan, {prims} objects"),
             Accel::Bvh(b) => format!(
                 "BVH, {prims} objects, {} nodes, built in {:.1} ms",
                 b.node_count(),

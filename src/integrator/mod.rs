@@ -27,7 +27,8 @@ pub fn russian_roulette(beta: &mut DVec3, depth: u32, u: f64) -> bool {
         return true;
     }
     let q = max_component(*beta).min(MAX_SURVIVAL);
-    if !(q > 0.0) || u >= q {
+    // `u < q` is false for a NaN q too, so a broken throughput ends the path.
+    if u >= q || q.is_nan() || q <= 0.0 {
         return false;
     }
     *beta /= q;

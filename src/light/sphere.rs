@@ -50,7 +50,7 @@ impl SphereLight {
                 axis,
                 one_minus_cos_max,
             } => {
-                if !(one_minus_cos_max > 0.0) {
+                if one_minus_cos_max.is_nan() || one_minus_cos_max <= 0.0 {
                     return None;
                 }
                 let local = warp::uniform_cone(u, one_minus_cos_max);

@@ -4,18 +4,57 @@
 use crate::math::DVec3;
 use std::f64::consts::{FRAC_1_PI, PI};
 
+/// (sin x, cos x) for |x| <= pi/4 by Taylor polynomials to degree 13/14: error below 3e-14,
+/// and about four times cheaper than libm's `sincos`, which was 10% of a cornell render.
+#[inline]
+pub fn sin_cos_eighth(x: f64) -> (f64, f64) {
+    let x2 = x * x;
+    let s = x
+        * (1.0
+            + x2 * (-1.0 / 6.0
+                + x2 * (1.0 / 120.0
+                    + x2 * (-1.0 / 5040.0
+                        + x2 * (1.0 / 362_880.0
+                            + x2 * (-1.0 / 39_916_800.0 + x2 * (1.0 / 6_227_020_800.0)))))));
+    let c = 1.0
+        + x2 * (-0.5
+            + x2 * (1.0 / 24.0
+                + x2 * (-1.0 / 720.0
+                    + x2 * (1.0 / 40_320.0
+                        + x2 * (-1.0 / 3_628_800.0
+                            + x2 * (1.0 / 479_001_600.0 + x2 * (-1.0 / 87_178_291_200.0)))))));
+    (s, c)
+}
+
+/// (sin, cos) of 2 pi u for u in [0, 1): exact quadrant reduction, then [`sin_cos_eighth`].
+#[inline]
+pub fn sin_cos_turn(u: f64) -> (f64, f64) {
+    let k = (4.0 * u).round();
+    let (s, c) = sin_cos_eighth(2.0 * PI * (u - 0.25 * k));
+    match k as i32 & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
 /// Shirley-Chiu concentric map of the square onto the unit disk (area preserving, low distortion).
+#[inline]
 pub fn concentric_disk(u: (f64, f64)) -> (f64, f64) {
     let (a, b) = (2.0 * u.0 - 1.0, 2.0 * u.1 - 1.0);
     if a == 0.0 && b == 0.0 {
         return (0.0, 0.0);
     }
-    let (r, phi) = if a.abs() > b.abs() {
-        (a, (PI / 4.0) * (b / a))
+    if a.abs() > b.abs() {
+        // phi = pi/4 b/a
+        let (s, c) = sin_cos_eighth((PI / 4.0) * (b / a));
+        (a * c, a * s)
     } else {
-        (b, PI / 2.0 - (PI / 4.0) * (a / b))
-    };
-    (r * phi.cos(), r * phi.sin())
+        // phi = pi/2 - pi/4 a/b: cos(phi) = sin(pi/4 a/b), sin(phi) = cos(pi/4 a/b)
+        let (s, c) = sin_cos_eighth((PI / 4.0) * (a / b));
+        (b * s, b * c)
+    }
 }
 
 /// Cosine-weighted hemisphere around +z (Malley's method): pdf = cos(theta) / pi.
@@ -37,8 +76,8 @@ pub fn cosine_hemisphere_pdf(cos_theta: f64) -> f64 {
 pub fn uniform_sphere(u: (f64, f64)) -> DVec3 {
     let z = 1.0 - 2.0 * u.0;
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.1;
-    DVec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (s, c) = sin_cos_turn(u.1);
+    DVec3::new(r * c, r * s, z)
 }
 
 pub const UNIFORM_SPHERE_PDF: f64 = 0.25 * FRAC_1_PI;
@@ -52,8 +91,8 @@ pub fn uniform_cone(u: (f64, f64), one_minus_cos_max: f64) -> DVec3 {
     let one_minus_cos = u.0 * one_minus_cos_max;
     let cos_theta = 1.0 - one_minus_cos;
     let sin_theta = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.1;
-    DVec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
+    let (s, c) = sin_cos_turn(u.1);
+    DVec3::new(sin_theta * c, sin_theta * s, cos_theta)
 }
 
 pub fn uniform_cone_pdf(one_minus_cos_max: f64) -> f64 {
@@ -82,5 +121,41 @@ pub fn power_heuristic(f: f64, g: f64) -> f64 {
         0.0
     } else {
         f2 / (f2 + g2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_sin_cos_matches_libm() {
+        for i in 0..=100_000 {
+            let u = i as f64 / 100_000.0;
+            let (s, c) = sin_cos_turn(u.min(1.0 - f64::EPSILON));
+            let phi = 2.0 * PI * u;
+            assert!((s - phi.sin()).abs() < 1e-13, "sin at u={u}");
+            assert!((c - phi.cos()).abs() < 1e-13, "cos at u={u}");
+        }
+    }
+
+    #[test]
+    fn concentric_disk_stays_in_the_disk_and_matches_the_polar_form() {
+        for i in 0..200 {
+            for j in 0..200 {
+                let u = (i as f64 / 199.0, j as f64 / 199.0);
+                let (x, y) = concentric_disk(u);
+                assert!(x * x + y * y <= 1.0 + 1e-12);
+                let (a, b) = (2.0 * u.0 - 1.0, 2.0 * u.1 - 1.0);
+                let (r, phi) = if a == 0.0 && b == 0.0 {
+                    (0.0, 0.0)
+                } else if a.abs() > b.abs() {
+                    (a, (PI / 4.0) * (b / a))
+                } else {
+                    (b, PI / 2.0 - (PI / 4.0) * (a / b))
+                };
+                assert!((x - r * phi.cos()).abs() < 1e-13 && (y - r * phi.sin()).abs() < 1e-13);
+            }
+        }
     }
 }

@@ -1,0 +1,149 @@
+//! ptui against an independent renderer: smallpt's Cornell box at 320x240 compared with
+//! `../shared/refs/cornell.exr` (Mitsuba 3, thousands of spp, box filter, exact Fresnel).
+
+mod common;
+
+use ptui::reference;
+use ptui::render::Renderer;
+use ptui::scene;
+use ptui::settings::{RenderSettings, SettingsOverrides};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+/// The reference's own RMSE against the truth (refs/stats.txt): measured RMSE is about
+/// sqrt(ours^2 + REF_NOISE^2).
+const REF_NOISE: f64 = 0.0057;
+
+#[test]
+fn cornell_is_unbiased_against_the_reference() {
+    let path = common::refs_dir().join("cornell.exr");
+    let reference = reference::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let scene = Arc::new(scene::load("cornell").expect("built-in"));
+    let settings = RenderSettings::merged(&[
+        &scene.render,
+        &SettingsOverrides {
+            spp: Some(1024),
+            ..Default::default()
+        },
+    ]);
+    reference
+        .check_size(settings.width, settings.height)
+        .unwrap();
+    let mut r = Renderer::new(scene, settings).expect("settings");
+    let mut rows = Vec::new();
+    r.render(&AtomicBool::new(false), |r| {
+        let spp = r.stats().complete_passes;
+        if [16, 64, 256, 1024].contains(&spp) {
+            let img = r.film().mean_rgb_f32();
+            let measured = reference::rmse(&img, &reference.data);
+            rows.push((spp, measured, reference::channel_means(&img)));
+        }
+        true
+    });
+    assert_eq!(r.stats().invalid, 0);
+    for (spp, rmse, _) in &rows {
+        eprintln!("{spp:5} spp: rmse {rmse:.5}");
+    }
+    // RMSE falls like 1/sqrt(spp): after removing the reference's noise, the slope of
+    // log(rmse) against log(spp) is -1/2. With 76,800 pixels the RMSE itself is known to well
+    // under 1%, so +-0.05 leaves room only for real bias or mis-scaled noise.
+    let points: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|(spp, rmse, _)| {
+            let ours = (rmse * rmse - REF_NOISE * REF_NOISE).max(1e-12).sqrt();
+            ((*spp as f64).ln(), ours.ln())
+        })
+        .collect();
+    let slope = fit_slope(&points);
+    assert!(
+        (slope + 0.5).abs() < 0.05,
+        "slope {slope:.3}, expected -0.5"
+    );
+    // Every checkpoint on the line C / sqrt(spp) within 5%.
+    let c = (points.iter().map(|(x, y)| y + 0.5 * x).sum::<f64>() / points.len() as f64).exp();
+    for ((spp, rmse, _), (x, y)) in rows.iter().zip(&points) {
+        let predicted = c * (-0.5 * x).exp();
+        assert!(
+            (y.exp() / predicted - 1.0).abs() < 0.05,
+            "{spp} spp: rmse {rmse:.5} off the 1/sqrt(spp) line ({predicted:.5})"
+        );
+    }
+    // Mean radiance per channel within 0.5% at 1024 spp.
+    let (_, _, means) = rows.last().expect("1024 spp row");
+    let ref_means = reference.channel_means();
+    for c in 0..3 {
+        let rel = means[c] / ref_means[c] - 1.0;
+        assert!(
+            rel.abs() < 0.005,
+            "channel {c}: mean {:.5} vs reference {:.5} ({:+.3}%)",
+            means[c],
+            ref_means[c],
+            rel * 100.0
+        );
+    }
+}
+
+/// The direct-light check of refs/README.md: the floor right under the light receives
+/// 12 * 0.75 * sin^2(a), tan(a) = 18 / 81.5 (~0.418) from the visible cap only; a renderer that
+/// leaks light through the ceiling gets ~0.51.
+#[test]
+fn direct_light_under_the_cap_does_not_leak() {
+    use ptui::material::MaterialKind;
+    use ptui::math::{DVec3, Ray};
+    use ptui::sampling::Rng;
+    let scene = scene::load("cornell").expect("built-in");
+    let p = DVec3::new(50.0, 0.0, 81.6);
+    let n = DVec3::Y;
+    let floor_hit = scene
+        .intersect(&Ray::new(p + n, -n), f64::INFINITY)
+        .expect("floor");
+    let floor = scene.material(&floor_hit);
+    assert_eq!(floor.kind, MaterialKind::Diffuse);
+    let mut rng = Rng::new(5);
+    let samples = 200_000;
+    let mut sum = 0.0;
+    let mut sum2 = 0.0;
+    for _ in 0..samples {
+        let ls = scene
+            .lights
+            .sample(
+                floor_hit.p,
+                rng.next_f64(),
+                (rng.next_f64(), rng.next_f64()),
+            )
+            .expect("light sample");
+        let cos = ls.wi.dot(n).max(0.0);
+        let o = ptui::geometry::spawn_origin(floor_hit.p, floor_hit.n, floor_hit.err, ls.wi);
+        let visible = scene
+            .intersect(&Ray::new(o, ls.wi), f64::INFINITY)
+            .is_some_and(|h| h.prim == ls.prim);
+        let v = if visible {
+            ls.le.x * 0.75 / std::f64::consts::PI * cos / ls.pdf
+        } else {
+            0.0
+        };
+        sum += v;
+        sum2 += v * v;
+    }
+    let mean = sum / samples as f64;
+    let se = ((sum2 / samples as f64 - mean * mean) / samples as f64).sqrt();
+    // Exact cap: the light sphere (r 600, centre y 681.33) cut by the ceiling plane y = 81.6.
+    let h: f64 = 81.6;
+    let cap_r = (600.0f64.powi(2) - (681.33 - h).powi(2)).sqrt();
+    let sin2 = 1.0 / (1.0 + (h / cap_r).powi(2));
+    let expected = 12.0 * 0.75 * sin2;
+    assert!((expected - 0.418).abs() < 0.01);
+    assert!(
+        (mean - expected).abs() < 5.0 * se + 1e-3,
+        "direct light {mean:.4} +- {se:.4}, expected {expected:.4}"
+    );
+}
+
+fn fit_slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let mx = points.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = points.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    sxy / sxx
+}

@@ -1,0 +1,268 @@
+//! Chi-square goodness-of-fit tests for the direction samplers, after Mitsuba's `chi2.py`: bin
+//! the sphere of directions, compare sample counts with the counts the claimed pdf predicts
+//! (integrated numerically over each bin), and pool sparse bins.
+
+mod common;
+
+use common::{chi2_sf, z_for_two_sided};
+use ptui::geometry::Sphere;
+use ptui::light::sphere::SphereLight;
+use ptui::material::{Material, MaterialKind};
+use ptui::math::{DVec3, Frame, Ray};
+use ptui::sampling::{warp, Rng};
+use std::f64::consts::PI;
+
+const THETA_BINS: usize = 20;
+const PHI_BINS: usize = 40;
+const SAMPLES: usize = 400_000;
+/// Family-wise significance level over all tests in this file (Sidak-corrected per test).
+const ALPHA: f64 = 0.01;
+const TESTS: f64 = 10.0;
+
+fn bin_of(w: DVec3) -> usize {
+    let z = w.z.clamp(-1.0, 1.0);
+    let i = (((z + 1.0) * 0.5) * THETA_BINS as f64).min(THETA_BINS as f64 - 1.0) as usize;
+    let mut phi = w.y.atan2(w.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let j = ((phi / (2.0 * PI)) * PHI_BINS as f64).min(PHI_BINS as f64 - 1.0) as usize;
+    i * PHI_BINS + j
+}
+
+/// Integral of `pdf` over each bin (in z = cos theta and phi, where d(omega) = dz dphi),
+/// by the midpoint rule on a fine sub-grid.
+fn expected_fractions(pdf: &dyn Fn(DVec3) -> f64) -> Vec<f64> {
+    const SUB: usize = 24;
+    let mut out = vec![0.0; THETA_BINS * PHI_BINS];
+    let dz = 2.0 / (THETA_BINS * SUB) as f64;
+    let dphi = 2.0 * PI / (PHI_BINS * SUB) as f64;
+    for (b, slot) in out.iter_mut().enumerate() {
+        let (i, j) = (b / PHI_BINS, b % PHI_BINS);
+        let mut sum = 0.0;
+        for si in 0..SUB {
+            let z = -1.0 + ((i * SUB + si) as f64 + 0.5) * dz;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            for sj in 0..SUB {
+                let phi = ((j * SUB + sj) as f64 + 0.5) * dphi;
+                sum += pdf(DVec3::new(r * phi.cos(), r * phi.sin(), z));
+            }
+        }
+        *slot = sum * dz * dphi;
+    }
+    out
+}
+
+/// Run the test over the whole sphere of directions; panics if the histogram does not match.
+fn chi2_test(
+    name: &str,
+    mut sample: impl FnMut(&mut Rng) -> Option<DVec3>,
+    pdf: impl Fn(DVec3) -> f64,
+) {
+    let mut rng = Rng::new(0x5eed ^ name.len() as u64);
+    let mut counts = vec![0.0f64; THETA_BINS * PHI_BINS];
+    let mut n = 0usize;
+    for _ in 0..SAMPLES {
+        if let Some(w) = sample(&mut rng) {
+            assert!(
+                (w.length() - 1.0).abs() < 1e-9,
+                "{name}: non-unit direction {w:?}"
+            );
+            counts[bin_of(w)] += 1.0;
+            n += 1;
+        }
+    }
+    let expected = expected_fractions(&pdf);
+    let total: f64 = expected.iter().sum();
+    assert!(
+        (total - 1.0).abs() < 2e-3,
+        "{name}: pdf integrates to {total}, not 1"
+    );
+    chi2_compare(name, &counts, &expected, n);
+}
+
+/// Pearson's test of observed `counts` against `expected` fractions of `n` samples.
+fn chi2_compare(name: &str, counts: &[f64], expected: &[f64], n: usize) {
+    // Pool bins expecting fewer than 5 samples (the chi-square approximation needs more).
+    let (mut chi2, mut dof, mut pooled_obs, mut pooled_exp) = (0.0, 0usize, 0.0, 0.0);
+    for (obs, frac) in counts.iter().zip(expected) {
+        let exp = frac * n as f64;
+        if exp < 5.0 {
+            pooled_obs += obs;
+            pooled_exp += exp;
+            // A sample where the pdf claims nothing is a hard failure.
+            assert!(
+                !(exp == 0.0 && *obs > 0.0),
+                "{name}: {obs} samples in a bin of zero pdf"
+            );
+        } else {
+            chi2 += (obs - exp).powi(2) / exp;
+            dof += 1;
+        }
+    }
+    if pooled_exp > 0.0 {
+        chi2 += (pooled_obs - pooled_exp).powi(2) / pooled_exp;
+        dof += 1;
+    }
+    assert!(
+        dof >= 20,
+        "{name}: only {dof} usable bins: the test has no power"
+    );
+    let p = chi2_sf(chi2, (dof - 1) as f64);
+    let alpha = 1.0 - (1.0 - ALPHA).powf(1.0 / TESTS);
+    assert!(
+        p > alpha,
+        "{name}: chi2 = {chi2:.1} with {} dof, p = {p:.2e} < {alpha:.2e}",
+        dof - 1
+    );
+}
+
+#[test]
+fn statistics_helpers_match_tables() {
+    assert!((chi2_sf(3.841_458_8, 1.0) - 0.05).abs() < 1e-4);
+    assert!((chi2_sf(18.307_038, 10.0) - 0.05).abs() < 1e-4);
+    assert!((z_for_two_sided(0.05) - 1.959_964).abs() < 1e-3);
+}
+
+#[test]
+fn cosine_hemisphere_matches_its_pdf() {
+    for n in [DVec3::Z, -DVec3::Z, DVec3::new(1.0, -2.0, 0.5).normalize()] {
+        let frame = Frame::from_normal(n);
+        chi2_test(
+            "cosine hemisphere",
+            |rng| Some(frame.to_world(warp::cosine_hemisphere((rng.next_f64(), rng.next_f64())))),
+            |w| warp::cosine_hemisphere_pdf(w.dot(n)),
+        );
+    }
+}
+
+#[test]
+fn diffuse_material_samples_what_it_evaluates() {
+    let m = Material {
+        kind: MaterialKind::Diffuse,
+        color: DVec3::splat(0.5),
+        emission: DVec3::ZERO,
+    };
+    let n = DVec3::new(0.3, 0.4, -0.866).normalize();
+    let wo = DVec3::new(0.1, -0.2, -1.0).normalize();
+    chi2_test(
+        "diffuse bsdf",
+        |rng| {
+            let s = m.sample(wo, n, rng.next_f64(), (rng.next_f64(), rng.next_f64()))?;
+            let e = m.eval(wo, s.wi, n);
+            assert!((e.pdf - s.pdf).abs() < 1e-9 * s.pdf.max(1.0));
+            assert!((s.weight - e.f_cos / e.pdf).abs().max_element() < 1e-9);
+            Some(s.wi)
+        },
+        |w| m.eval(wo, w, n).pdf,
+    );
+}
+
+fn light(center: DVec3, radius: f64) -> SphereLight {
+    SphereLight {
+        prim: 0,
+        sphere: Sphere::new(center, radius),
+        emission: DVec3::ONE,
+    }
+}
+
+/// The cone sampler from outside the light: directions uniform over the subtended cone, and every
+/// one of them actually hits the sphere. Binned in the cone's own coordinates (equal solid-angle
+/// bins in 1 - cos and phi, measured in an independently built frame), so even a narrow cone
+/// gets many bins and the boundary is exact.
+#[test]
+fn sphere_light_cone_matches_its_pdf() {
+    let p = DVec3::new(0.2, -0.1, 0.3);
+    for (center, radius) in [
+        (DVec3::new(1.0, 2.0, -0.5), 1.2),
+        (DVec3::new(-3.0, 0.5, 2.0), 0.4),
+        (DVec3::new(0.2, -0.1, -1e3), 1e-2),
+    ] {
+        let l = light(center, radius);
+        let axis = (center - p).normalize();
+        let sin2 = radius * radius / (center - p).length_squared();
+        let one_minus_cos_max = sin2 / (1.0 + (1.0 - sin2).sqrt());
+        // Gram-Schmidt frame, deliberately not `Frame::from_normal`.
+        let helper = if axis.x.abs() < 0.9 {
+            DVec3::X
+        } else {
+            DVec3::Y
+        };
+        let e1 = (helper - axis * helper.dot(axis)).normalize();
+        let e2 = axis.cross(e1);
+        let mut counts = vec![0.0; THETA_BINS * PHI_BINS];
+        let mut rng = Rng::new(11);
+        for _ in 0..SAMPLES {
+            let s = l
+                .sample(p, (rng.next_f64(), rng.next_f64()))
+                .expect("sample");
+            assert!((s.pdf - l.pdf(p)).abs() <= 1e-12 * s.pdf);
+            assert!((s.pdf * 2.0 * PI * one_minus_cos_max - 1.0).abs() < 1e-9);
+            assert!(
+                l.sphere
+                    .intersect(&Ray::new(p, s.wi), f64::INFINITY)
+                    .is_some(),
+                "cone sample misses the light"
+            );
+            // 1 - cos(theta) from the cross product: accurate for tiny angles.
+            let sin_t = s.wi.cross(axis).length();
+            let one_minus_cos = sin_t * sin_t / (1.0 + s.wi.dot(axis));
+            let v = one_minus_cos / one_minus_cos_max;
+            assert!(v <= 1.0 + 1e-6, "sample outside the cone: {v}");
+            let i = ((v * THETA_BINS as f64) as usize).min(THETA_BINS - 1);
+            let mut phi = s.wi.dot(e2).atan2(s.wi.dot(e1));
+            if phi < 0.0 {
+                phi += 2.0 * PI;
+            }
+            let j = ((phi / (2.0 * PI) * PHI_BINS as f64) as usize).min(PHI_BINS - 1);
+            counts[i * PHI_BINS + j] += 1.0;
+        }
+        let uniform = vec![1.0 / (THETA_BINS * PHI_BINS) as f64; THETA_BINS * PHI_BINS];
+        chi2_compare("sphere light cone", &counts, &uniform, SAMPLES);
+    }
+}
+
+/// Inside the light every direction reaches it (uniform sphere); on its surface, the hemisphere
+/// towards the centre (the cone opens to 90 degrees).
+#[test]
+fn sphere_light_from_inside_and_on_the_surface() {
+    let l = light(DVec3::new(0.5, 0.0, 0.0), 2.0);
+    let inside = DVec3::new(0.0, 0.3, -0.2);
+    chi2_test(
+        "sphere light inside",
+        |rng| {
+            l.sample(inside, (rng.next_f64(), rng.next_f64()))
+                .map(|s| s.wi)
+        },
+        |_| 0.25 / PI,
+    );
+    let on = l.sphere.center + DVec3::new(0.0, 0.0, 2.0);
+    chi2_test(
+        "sphere light on surface",
+        |rng| l.sample(on, (rng.next_f64(), rng.next_f64())).map(|s| s.wi),
+        |w| if w.z <= 0.0 { 0.5 / PI } else { 0.0 },
+    );
+}
+
+/// A tiny light far away: the cone is ~1e-12 sr wide; pdf times solid angle must still be 1 and
+/// samples must still hit it (the naive 1 - sqrt(1 - sin^2) rounds to zero here).
+#[test]
+fn tiny_sphere_light_keeps_its_cone() {
+    let p = DVec3::new(50.0, 0.0, 81.6);
+    let l = light(DVec3::new(50.0, 65.1, 81.6), 1e-4);
+    let d = 65.1f64;
+    let solid_angle = 2.0 * PI * (1.0 - (1.0 - (1e-4 / d).powi(2)).sqrt());
+    let exact = PI * (1e-4 / d).powi(2); // small-angle limit, accurate to ~1e-12 relative
+    assert!(solid_angle == 0.0 || (solid_angle - exact).abs() / exact > 1e-6); // naive form fails
+    assert!((1.0 / l.pdf(p) - exact).abs() / exact < 1e-6);
+    let mut rng = Rng::new(1);
+    for _ in 0..1000 {
+        let s = l
+            .sample(p, (rng.next_f64(), rng.next_f64()))
+            .expect("sample");
+        assert!(l
+            .sphere
+            .intersect(&Ray::new(p, s.wi), f64::INFINITY)
+            .is_some());
+    }
+}
