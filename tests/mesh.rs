@@ -5,7 +5,7 @@ use ptui::accel::AccelChoice;
 use ptui::render::Renderer;
 use ptui::scene::{self, BuildOptions, SceneError};
 use ptui::settings::{IntegratorKind, RenderSettings, SettingsOverrides};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
@@ -19,7 +19,7 @@ fn temp_dir(name: &str) -> PathBuf {
 
 /// Write `scene.toml` with a mesh entry pointing at `obj` (relative) and `obj`'s contents.
 fn scene_with_obj(
-    dir: &PathBuf,
+    dir: &Path,
     obj_name: &str,
     obj: Option<&str>,
 ) -> Result<scene::Scene, SceneError> {
@@ -88,7 +88,7 @@ fn obj_errors_name_the_file_and_the_problem() {
 fn too_many_triangles_is_an_error_before_generating_them() {
     let src =
         "[[mesh]]\ntorus_knot = { p = 2, q = 3, segments = 100000, sides = 100, tube = 0.3 }\n";
-    let err = scene::load_str(src, "big.toml").err().expect("too big");
+    let err = scene::load_str(src, "big.toml").expect_err("too big");
     let text = err.to_string();
     assert!(
         text.contains("20000000 triangles") && text.contains("big.toml:2"),

@@ -323,7 +323,7 @@ fn build_node(prims: &mut [BuildPrim], first: usize, depth: usize, nodes: &mut V
     } else {
         2
     };
-    if !(extent[axis] > 0.0) {
+    if extent[axis].is_nan() || extent[axis] <= 0.0 {
         // All centroids coincide: no split can separate them by position.
         if n <= MAX_LEAF {
             return index;

@@ -26,7 +26,7 @@ impl TriangleLight {
         let n = self.triangle.normal()?;
         let to = y - p;
         let dist2 = to.length_squared();
-        if !(dist2 > 0.0) {
+        if dist2.is_nan() || dist2 <= 0.0 {
             return None;
         }
         let wi = to / dist2.sqrt();
