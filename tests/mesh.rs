@@ -160,11 +160,29 @@ fn flat_scan_and_bvh_render_identical_images() {
 
 #[test]
 fn scene_without_emitters_renders_the_background_without_nan() {
-    let src = "background = [0.2, 0.3, 0.4]\n[camera]\nposition = [0, 0, 5]\n\
-               [[quad]]\ncorner = [-1, -1, 0]\nedge1 = [2, 0, 0]\nedge2 = [0, 2, 0]\n";
-    let s = scene::load_str(src, "nolight.toml").unwrap();
+    let dir = temp_dir("nolight");
+    let path = dir.join("nolight.toml");
+    std::fs::write(
+        &path,
+        "background = [0.2, 0.3, 0.4]\n[camera]\nposition = [0, 0, 5]\nvfov = 60\n\
+         [[quad]]\ncorner = [-1, -1, 0]\nedge1 = [2, 0, 0]\nedge2 = [0, 2, 0]\ncolor = 0.5\n",
+    )
+    .unwrap();
+    let spec = path.to_str().unwrap();
+    let s = scene::load(spec).unwrap();
     assert!(!s.has_lights());
     assert!(s.report.to_string().contains("off (no emitters)"));
+    let img = render(spec, AccelChoice::Auto, 16, 16, 2);
+    assert!(img.iter().all(|v| v.is_finite() && *v >= 0.0));
+    // The top-left pixel sees only the background; the centre sees the grey quad lit by it
+    // (at most the background times the albedo).
+    assert_eq!(&img[..3], &[0.2f32, 0.3, 0.4]);
+    let centre = (8 * 16 + 8) * 3;
+    assert!(
+        img[centre] > 0.0 && img[centre] <= 0.5 * 0.2 + 1e-6,
+        "{}",
+        img[centre]
+    );
 }
 
 #[test]

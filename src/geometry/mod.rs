@@ -21,7 +21,8 @@ pub struct Hit {
     pub t: f64,
     /// Hit point, projected back onto the surface.
     pub p: DVec3,
-    /// Geometric unit normal, pointing out of the shape (for spheres, away from the centre).
+    /// Geometric unit normal, pointing out of the shape (for spheres, away from the centre; for
+    /// triangles, towards the side from which the vertices wind counter-clockwise).
     pub n: DVec3,
     /// Index of the primitive in the scene.
     pub prim: u32,
