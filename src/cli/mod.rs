@@ -42,12 +42,17 @@ pub struct BenchArgs {
     /// Flat-scan primitive tests per measurement (sets the number of rays).
     #[arg(long, default_value_t = 20_000_000)]
     pub work: usize,
+    /// `scenes`: samples per pixel of each render (320x240, 2 threads).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: u32,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum BenchTarget {
     /// Closest-hit throughput of the flat scan and the BVH, 1 to 100k primitives.
     Accel,
+    /// Paths per second and scene build time of the built-in scenes, 320x240, 2 threads.
+    Scenes,
 }
 
 #[derive(Args, Debug)]
