@@ -10,15 +10,17 @@
 use crate::geometry::triangle::gamma;
 use crate::geometry::{Aabb, Hit};
 use crate::math::{DVec3, Ray};
-use crate::scene::Primitive;
+use crate::scene::{Primitive, Shape};
 use std::time::{Duration, Instant};
 
 /// SAH buckets per split (pbrt uses 12; more buy little).
 const BUCKETS: usize = 16;
 /// A leaf never holds more primitives than this, unless they cannot be separated at all.
 const MAX_LEAF: usize = 4;
-/// Cost of a traversal step relative to one primitive test (pbrt: 1/2).
-const TRAVERSAL_COST: f64 = 0.5;
+/// Cost of a traversal step (a box test) relative to one primitive test. Measured on the
+/// torus-knot scene (1 thread): 1 renders 25% faster than pbrt's 1/2 (fewer, fuller leaves:
+/// 157k nodes instead of 216k for 131k triangles); 2 is no faster than 1.
+const TRAVERSAL_COST: f64 = 1.0;
 /// Below this depth splits follow the SAH; deeper, the median split by count guarantees that
 /// the tree (and the traversal stack) stays shallow even for adversarial inputs.
 const SAH_DEPTH: usize = 48;
@@ -42,6 +44,9 @@ pub struct Bvh {
     nodes: Vec<Node>,
     /// Primitive indices; each leaf owns a contiguous range.
     order: Vec<u32>,
+    /// The primitives' shapes in `order`: a leaf's shapes sit next to each other in memory
+    /// instead of scattered over the scene's primitive array (fewer cache misses).
+    shapes: Vec<Shape>,
     pub build_time: Duration,
 }
 
@@ -83,10 +88,12 @@ impl Bvh {
         if !build.is_empty() {
             build_node(&mut build, 0, 0, &mut nodes);
         }
-        let order = build.iter().map(|b| b.index).collect();
+        let order: Vec<u32> = build.iter().map(|b| b.index).collect();
+        let shapes = order.iter().map(|&i| prims[i as usize].shape).collect();
         Bvh {
             nodes,
             order,
+            shapes,
             build_time: started.elapsed(),
         }
     }
@@ -99,7 +106,7 @@ impl Bvh {
     /// mean over the rays of (boxes tested x TRAVERSAL_COST + primitives tested), counted by
     /// running the real traversal. The flat scan costs exactly the primitive count, so
     /// comparing the two says whether the boxes separate anything *for rays like these*.
-    pub fn probe_cost(&self, prims: &[Primitive], rays: &[Ray]) -> f64 {
+    pub fn probe_cost(&self, rays: &[Ray]) -> f64 {
         if rays.is_empty() {
             return 0.0;
         }
@@ -116,10 +123,10 @@ impl Bvh {
                 boxes += 1;
                 if hit_box(&n.bounds, ray.o, inv, best) {
                     if n.count > 0 {
-                        let start = n.offset as usize;
-                        for &i in &self.order[start..start + n.count as usize] {
+                        let range = n.offset as usize..(n.offset + n.count) as usize;
+                        for shape in &self.shapes[range] {
                             tests += 1;
-                            if let Some(t) = prims[i as usize].shape.intersect(ray, best) {
+                            if let Some(t) = shape.intersect(ray, best) {
                                 best = t;
                             }
                         }
@@ -162,10 +169,10 @@ impl Bvh {
             let n = &self.nodes[node];
             if hit_box(&n.bounds, ray.o, inv, best) {
                 if n.count > 0 {
-                    let start = n.offset as usize;
-                    for &i in &self.order[start..start + n.count as usize] {
+                    let range = n.offset as usize..(n.offset + n.count) as usize;
+                    for (&i, shape) in self.order[range.clone()].iter().zip(&self.shapes[range]) {
                         // Allow t == best so an equal-distance hit of a lower index wins.
-                        if let Some(t) = prims[i as usize].shape.intersect(ray, best.next_up()) {
+                        if let Some(t) = shape.intersect(ray, best.next_up()) {
                             let found = best_index != u32::MAX;
                             if t < best || (found && t == best && i < best_index) {
                                 best = t;
@@ -197,7 +204,7 @@ impl Bvh {
 
     /// Whether anything is hit in (0, t_max); stops at the first hit found.
     #[inline]
-    pub fn any_hit(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> bool {
+    pub fn any_hit(&self, ray: &Ray, t_max: f64) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -209,11 +216,12 @@ impl Bvh {
             let n = &self.nodes[node];
             if hit_box(&n.bounds, ray.o, inv, t_max) {
                 if n.count > 0 {
-                    let start = n.offset as usize;
-                    for &i in &self.order[start..start + n.count as usize] {
-                        if prims[i as usize].shape.intersect(ray, t_max).is_some() {
-                            return true;
-                        }
+                    let range = n.offset as usize..(n.offset + n.count) as usize;
+                    if self.shapes[range]
+                        .iter()
+                        .any(|s| s.intersect(ray, t_max).is_some())
+                    {
+                        return true;
                     }
                 } else {
                     stack[sp] = n.offset;

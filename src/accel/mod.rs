@@ -75,7 +75,7 @@ impl Accel {
             ),
             AccelChoice::Auto => {
                 let bvh = Bvh::build(prims);
-                let cost = bvh.probe_cost(prims, probe);
+                let cost = bvh.probe_cost(probe);
                 if probe.is_empty() || cost < n as f64 {
                     let why = format!(
                         "auto: {n} >= crossover {BVH_CROSSOVER}; camera rays cost {cost:.1} \
@@ -106,7 +106,7 @@ impl Accel {
     pub fn any_hit(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> bool {
         match self {
             Accel::Flat(_) => flat::any_hit(prims, ray, t_max),
-            Accel::Bvh(b) => b.any_hit(prims, ray, t_max),
+            Accel::Bvh(b) => b.any_hit(ray, t_max),
         }
     }
 
