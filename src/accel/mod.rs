@@ -35,8 +35,9 @@ pub fn camera_probe(camera: &Camera, nx: u32, ny: u32) -> Vec<Ray> {
 
 /// Primitive count from which `auto` builds a BVH. Measured with `ptui bench accel` on the
 /// development machine (random spheres and triangles, see `accel::bench`; table in the README):
-/// the flat scan wins only for a single primitive (45 ns against 76 ns per ray), the BVH from 2
-/// on (54 ns against 106 ns), because its root box already rejects rays that miss everything.
+/// at a single primitive the two tie within the noise (flat 29-49 ns, BVH 28-76 ns per ray over
+/// four runs), from 2 on the BVH wins in every run (1.6x to 2.6x), because its root box already
+/// rejects rays that miss everything.
 /// Scenes whose boxes cannot separate their objects are caught by the SAH check instead.
 pub const BVH_CROSSOVER: usize = 2;
 
