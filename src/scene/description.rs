@@ -5,12 +5,28 @@
 //! [camera]                 # see `camera`
 //! [render]                 # see `settings`
 //! background = [0, 0, 0]
+//! accel = "auto"           # auto | flat | bvh; top-level keys come before any [table]
 //!
 //! [[sphere]]
 //! name = "left"            # optional, unique
 //! center = [100001, 40.8, 81.6]
 //! radius = 1e5
 //! color = [0.75, 0.25, 0.25]
+//!
+//! [[triangle]]
+//! vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]   # front: counter-clockwise
+//! emission = 5
+//!
+//! [[quad]]                 # parallelogram, two triangles
+//! corner = [213, 548.7, 227]
+//! edge1 = [130, 0, 0]
+//! edge2 = [0, 0, 105]
+//!
+//! [[mesh]]
+//! path = "meshes/bunny.obj"   # or torus_knot = { p = 2, q = 3, segments = 1024, sides = 64, tube = 0.45 }
+//! scale = 10
+//! rotate = [-90, 0, 0]        # degrees about x, then y, then z
+//! translate = [0, 4, 0]
 //! ```
 
 use crate::settings::{SettingsOverrides, MAX_DIMENSION};
