@@ -2,10 +2,10 @@
 //! as they are read so each error carries the span (hence line) of the offending value.
 //!
 //! ```toml
-//! [camera]                 # see `camera`
-//! [render]                 # see `settings`
 //! background = [0, 0, 0]
 //! accel = "auto"           # auto | flat | bvh; top-level keys come before any [table]
+//! [camera]                 # see `camera`
+//! [render]                 # see `settings`
 //!
 //! [[sphere]]
 //! name = "left"            # optional, unique
