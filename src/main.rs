@@ -9,6 +9,7 @@ fn main() {
         Some(Command::Render(args)) => cli::render::run(args),
         Some(Command::Converge(args)) => cli::converge::run(args),
         Some(Command::Check(args)) => cli::check::run(args),
+        Some(Command::Bench(args)) => cli::bench::run(args),
         Some(Command::Scenes) => {
             for name in builtin::names() {
                 println!("{name}");

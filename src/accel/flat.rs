@@ -1,9 +1,10 @@
 //! Brute-force closest hit: the reference the BVH is tested against, and the fastest choice for
 //! scenes with few primitives.
 
+use super::lanes::SphereLanes;
 use crate::geometry::Hit;
 use crate::math::Ray;
-use crate::scene::Primitive;
+use crate::scene::{Primitive, Shape};
 
 #[inline]
 pub fn intersect(prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<Hit> {
@@ -16,4 +17,57 @@ pub fn intersect(prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<Hit> {
         }
     }
     best_index.map(|i| prims[i].shape.hit(ray, best, i as u32))
+}
+
+/// Whether any primitive is hit in (0, t_max).
+#[inline]
+pub fn any_hit(prims: &[Primitive], ray: &Ray, t_max: f64) -> bool {
+    prims
+        .iter()
+        .any(|p| p.shape.intersect(ray, t_max).is_some())
+}
+
+/// The flat scan the renderer uses: spheres four at a time from a structure-of-arrays copy
+/// ([`SphereLanes`], bit-identical to [`Sphere::intersect`](crate::geometry::Sphere)), the
+/// other shapes one by one. Same answer as [`intersect`], ties included: among equal distances
+/// the lowest primitive index wins.
+#[derive(Clone, Debug)]
+pub struct FlatScan {
+    spheres: SphereLanes,
+    /// Indices of the primitives that are not spheres.
+    others: Vec<u32>,
+}
+
+impl FlatScan {
+    pub fn new(prims: &[Primitive]) -> Self {
+        FlatScan {
+            spheres: SphereLanes::new(prims),
+            others: prims
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| !matches!(p.shape, Shape::Sphere(_)))
+                .map(|(i, _)| i as u32)
+                .collect(),
+        }
+    }
+
+    #[inline]
+    pub fn intersect(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<Hit> {
+        let (mut best, mut best_index) = self
+            .spheres
+            .intersect(ray, t_max)
+            .unwrap_or((t_max, u32::MAX));
+        for &i in &self.others {
+            // Allow t == best so an equal-distance hit of a lower index wins.
+            if let Some(t) = prims[i as usize].shape.intersect(ray, best.next_up()) {
+                let found = best_index != u32::MAX;
+                if t < best || (found && t == best && i < best_index) {
+                    best = t;
+                    best_index = i;
+                }
+            }
+        }
+        (best_index != u32::MAX)
+            .then(|| prims[best_index as usize].shape.hit(ray, best, best_index))
+    }
 }

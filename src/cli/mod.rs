@@ -1,5 +1,6 @@
 //! The command line: clap definitions and one module per subcommand. `main.rs` only dispatches.
 
+pub mod bench;
 pub mod check;
 pub mod converge;
 pub mod render;
@@ -39,6 +40,31 @@ pub enum Command {
     /// Render scenes briefly and test them against their `[check]` expectations (default: all of
     /// scenes/extreme/).
     Check(check::CheckArgs),
+    /// Measure parts of the renderer (`accel`: flat scan vs BVH by primitive count).
+    Bench(BenchArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    #[arg(value_enum)]
+    pub target: BenchTarget,
+    /// Largest primitive count of the sweep (1, 2, 4, ... up to this).
+    #[arg(long, default_value_t = 100_000)]
+    pub max_prims: usize,
+    /// Flat-scan primitive tests per measurement (sets the number of rays).
+    #[arg(long, default_value_t = 20_000_000)]
+    pub work: usize,
+    /// `scenes`: samples per pixel of each render (320x240, 2 threads).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: u32,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum BenchTarget {
+    /// Closest-hit throughput of the flat scan and the BVH, 1 to 100k primitives.
+    Accel,
+    /// Paths per second and scene build time of the built-in scenes, 320x240, 2 threads.
+    Scenes,
 }
 
 #[derive(Args, Debug)]
@@ -57,6 +83,9 @@ pub struct RenderArgs {
     /// normalised to the 99th percentile.
     #[arg(long, value_name = "FILE")]
     pub error_map: Option<PathBuf>,
+    /// Force the accelerator (default: the scene file's `accel`, else auto).
+    #[arg(long, value_enum)]
+    pub accel: Option<crate::accel::AccelChoice>,
 }
 
 /// Flags that override the scene file's `[render]` table.

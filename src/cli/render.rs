@@ -13,7 +13,11 @@ use std::sync::Arc;
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let spec = args.scene.as_deref().unwrap_or(builtin::DEFAULT);
-    let scene = Arc::new(scene::load(spec)?);
+    let options = scene::BuildOptions {
+        accel: args.accel,
+        ..Default::default()
+    };
+    let scene = Arc::new(scene::load_with(spec, &options)?);
     let settings = RenderSettings::merged(&[&scene.render, &args.settings.overrides()]);
     // Fail on a bad output path before spending minutes rendering.
     output::check_writable(&args.output)?;

@@ -7,9 +7,12 @@
 //! for huge ones.
 
 pub mod sphere;
+pub mod torus_knot;
+pub mod triangle;
 
 use crate::math::DVec3;
 pub use sphere::Sphere;
+pub use triangle::Triangle;
 
 /// A surface interaction.
 #[derive(Clone, Copy, Debug)]
@@ -18,7 +21,8 @@ pub struct Hit {
     pub t: f64,
     /// Hit point, projected back onto the surface.
     pub p: DVec3,
-    /// Geometric unit normal, pointing out of the shape (for spheres, away from the centre).
+    /// Geometric unit normal, pointing out of the shape (for spheres, away from the centre; for
+    /// triangles, towards the side from which the vertices wind counter-clockwise).
     pub n: DVec3,
     /// Index of the primitive in the scene.
     pub prim: u32,
@@ -75,5 +79,14 @@ impl Aabb {
 
     pub fn contains(&self, o: &Aabb) -> bool {
         self.min.cmple(o.min).all() && self.max.cmpge(o.max).all()
+    }
+
+    /// Half the surface area (the SAH only needs ratios); 0 for an empty box.
+    pub fn half_area(&self) -> f64 {
+        let d = self.max - self.min;
+        if d.min_element() < 0.0 {
+            return 0.0;
+        }
+        d.x * d.y + d.y * d.z + d.z * d.x
     }
 }

@@ -1,7 +1,8 @@
 //! Emitters for next-event estimation: which light to sample (in proportion to power) and how
-//! (sphere lights by the cone of directions they subtend).
+//! (sphere lights by the cone of directions they subtend, triangles and quads by area).
 
 pub mod sphere;
+pub mod triangle;
 
 use crate::math::{luminance, DVec3};
 use crate::sampling::warp;
@@ -21,12 +22,14 @@ pub struct LightSample {
 #[derive(Clone, Copy, Debug)]
 pub enum Light {
     Sphere(sphere::SphereLight),
+    Triangle(triangle::TriangleLight),
 }
 
 impl Light {
     pub fn prim(&self) -> u32 {
         match self {
             Light::Sphere(l) => l.prim,
+            Light::Triangle(l) => l.prim,
         }
     }
 
@@ -35,6 +38,10 @@ impl Light {
         match self {
             Light::Sphere(l) => {
                 std::f64::consts::PI * l.sphere.area() * luminance(l.emission).max(0.0)
+            }
+            // Two-sided: each side emits pi * area * L.
+            Light::Triangle(l) => {
+                2.0 * std::f64::consts::PI * l.triangle.area() * luminance(l.emission).max(0.0)
             }
         }
     }
@@ -99,6 +106,7 @@ impl Lights {
         }
         let mut s = match &self.lights[index] {
             Light::Sphere(l) => l.sample(p, u)?,
+            Light::Triangle(l) => l.sample(p, u)?,
         };
         s.pdf *= pmf;
         Some(s)
@@ -107,9 +115,10 @@ impl Lights {
     /// Solid-angle pdf (with selection) that [`Lights::sample`] picks direction `wi` from `p`
     /// towards light `light`, given that `wi` hits it.
     #[inline]
-    pub fn pdf(&self, light: usize, p: DVec3, _wi: DVec3) -> f64 {
+    pub fn pdf(&self, light: usize, p: DVec3, wi: DVec3) -> f64 {
         let pdf = match &self.lights[light] {
             Light::Sphere(l) => l.pdf(p),
+            Light::Triangle(l) => l.pdf(p, wi),
         };
         pdf * self.pmf[light]
     }

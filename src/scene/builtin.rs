@@ -8,6 +8,15 @@ pub const BUILTIN: &[(&str, &str)] = &[
         include_str!("../../scenes/cornell-small-light.toml"),
     ),
     ("smallpaint", include_str!("../../scenes/smallpaint.toml")),
+    (
+        "cornell-mesh",
+        include_str!("../../scenes/cornell-mesh.toml"),
+    ),
+    (
+        "spheres-field",
+        include_str!("../../scenes/spheres-field.toml"),
+    ),
+    ("torus-knot", include_str!("../../scenes/torus-knot.toml")),
 ];
 
 /// The scene the TUI and `render` open without an argument.

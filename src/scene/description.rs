@@ -2,15 +2,31 @@
 //! as they are read so each error carries the span (hence line) of the offending value.
 //!
 //! ```toml
+//! background = [0, 0, 0]
+//! accel = "auto"           # auto | flat | bvh; top-level keys come before any [table]
 //! [camera]                 # see `camera`
 //! [render]                 # see `settings`
-//! background = [0, 0, 0]
 //!
 //! [[sphere]]
 //! name = "left"            # optional, unique
 //! center = [100001, 40.8, 81.6]
 //! radius = 1e5
 //! color = [0.75, 0.25, 0.25]
+//!
+//! [[triangle]]
+//! vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]   # front: counter-clockwise
+//! emission = 5
+//!
+//! [[quad]]                 # parallelogram, two triangles
+//! corner = [213, 548.7, 227]
+//! edge1 = [130, 0, 0]
+//! edge2 = [0, 0, 105]
+//!
+//! [[mesh]]
+//! path = "meshes/bunny.obj"   # or torus_knot = { p = 2, q = 3, segments = 1024, sides = 64, tube = 0.45 }
+//! scale = 10
+//! rotate = [-90, 0, 0]        # degrees about x, then y, then z
+//! translate = [0, 4, 0]
 //! ```
 
 use crate::settings::{SettingsOverrides, MAX_DIMENSION, MAX_THREADS};
@@ -31,6 +47,14 @@ pub struct SceneDesc {
     pub sphere: Vec<SphereDesc>,
     /// What `ptui check` expects of this scene (see `crate::check`); ignored by rendering.
     pub check: Option<crate::check::CheckDesc>,
+    /// Accelerator: auto (default), flat or bvh (see `accel`).
+    pub accel: Option<crate::accel::AccelChoice>,
+    #[serde(default)]
+    pub triangle: Vec<TriangleDesc>,
+    #[serde(default)]
+    pub quad: Vec<QuadDesc>,
+    #[serde(default)]
+    pub mesh: Vec<MeshDesc>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -98,6 +122,76 @@ pub const MIN_MAGNITUDE: f64 = 1e-30;
 /// Index of refraction range: every transparent material (diamond 2.42, germanium 4.0) and its
 /// inverse fit, and the radiance scaling eta^2 of one refraction stays at most 100.
 pub const IOR_RANGE: (f64, f64) = (0.1, 10.0);
+/// `[[triangle]]`: one triangle; the front side sees the vertices counter-clockwise.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleDesc {
+    pub name: Option<Spanned<String>>,
+    pub vertices: Spanned<[V3; 3]>,
+    pub material: Option<MaterialName>,
+    pub color: Option<Albedo>,
+    pub emission: Option<Rgb>,
+    pub ior: Option<Spanned<Ior>>,
+}
+
+/// `[[quad]]`: the parallelogram corner, corner + edge1, corner + edge1 + edge2, corner + edge2
+/// (two triangles; the front side is the one edge1 x edge2 points to).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct QuadDesc {
+    pub name: Option<Spanned<String>>,
+    pub corner: V3,
+    pub edge1: V3,
+    pub edge2: Spanned<V3>,
+    pub material: Option<MaterialName>,
+    pub color: Option<Albedo>,
+    pub emission: Option<Rgb>,
+    pub ior: Option<Spanned<Ior>>,
+}
+
+/// `[[mesh]]`: triangles from a Wavefront OBJ file (`path`, relative to the scene file) or from
+/// a built-in generator (`torus_knot`), placed by scale, then rotation (degrees about x, then
+/// y, then z), then translation.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDesc {
+    pub name: Option<Spanned<String>>,
+    pub path: Option<Spanned<String>>,
+    pub torus_knot: Option<Spanned<TorusKnotDesc>>,
+    pub translate: Option<V3>,
+    pub scale: Option<Positive>,
+    pub rotate: Option<V3>,
+    pub material: Option<MaterialName>,
+    pub color: Option<Albedo>,
+    pub emission: Option<Rgb>,
+    pub ior: Option<Spanned<Ior>>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TorusKnotDesc {
+    pub p: u32,
+    pub q: u32,
+    pub segments: u32,
+    pub sides: u32,
+    pub tube: Positive,
+}
+
+macro_rules! material_of {
+    ($($t:ty),*) => {$(
+        impl $t {
+            pub fn material(&self) -> MaterialDesc {
+                MaterialDesc {
+                    material: self.material,
+                    color: self.color,
+                    emission: self.emission,
+                    ior: self.ior.clone(),
+                }
+            }
+        }
+    )*};
+}
+material_of!(TriangleDesc, QuadDesc, MeshDesc);
 
 /// A finite 3-vector.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,18 +1,22 @@
 //! From TOML text to a validated [`Scene`]: parse, check what the per-value checks cannot
 //! (cross-field constraints, duplicate names), and choose the machinery this scene needs.
 
-use super::description::{MaterialDesc, MaterialName, SceneDesc};
+use super::description::{MaterialDesc, MaterialName, MeshDesc, SceneDesc};
+use super::mesh::{self, Transform, MAX_MESH_TRIANGLES};
 use super::{builtin, BuildReport, Primitive, Scene, SceneError, Shape};
-use crate::accel::Accel;
+use crate::accel::{camera_probe, Accel, AccelChoice};
 use crate::camera::Camera;
-use crate::geometry::Sphere;
-use crate::light::{sphere::SphereLight, Light, Lights};
+use crate::geometry::torus_knot::TorusKnot;
+use crate::geometry::{Sphere, Triangle};
+use crate::light::{sphere::SphereLight, triangle::TriangleLight, Light, Lights};
 use crate::material::{Material, MaterialKind};
 use crate::math::DVec3;
 use crate::settings::RenderSettings;
-use std::collections::HashMap;
-use std::path::Path;
+use std::collections::HashSet;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
+use toml::Spanned;
 
 /// Default reflectance of an object that states none (and is not a light).
 const DEFAULT_COLOR: f64 = 0.75;
@@ -21,15 +25,34 @@ const DEFAULT_IOR: f64 = 1.5;
 /// Default vertical field of view, degrees.
 const DEFAULT_VFOV: f64 = 40.0;
 
+/// Scene-build choices made outside the scene file.
+#[derive(Clone, Debug, Default)]
+pub struct BuildOptions {
+    /// Overrides the file's `accel` (tests and `ptui render --accel`).
+    pub accel: Option<AccelChoice>,
+    /// Where relative mesh paths start: the scene file's folder (`load` sets it); `None` means
+    /// the current directory.
+    pub base_dir: Option<PathBuf>,
+}
+
 /// Load a scene from a file path or a built-in name (a file of that name wins).
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
+    load_with(spec, &BuildOptions::default())
+}
+
+/// [`load`] with build options; a scene file's folder becomes the base of its mesh paths.
+pub fn load_with(spec: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
     let path = Path::new(spec);
     if path.is_file() {
         let src = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        return load_str(&src, spec);
+        let options = BuildOptions {
+            base_dir: Some(path.parent().map_or_else(PathBuf::new, Path::to_path_buf)),
+            ..options.clone()
+        };
+        return load_str_with(&src, spec, &options);
     }
     if path.exists() {
         return Err(SceneError::Io {
@@ -38,7 +61,7 @@ pub fn load(spec: &str) -> Result<Scene, SceneError> {
         });
     }
     match builtin::get(spec) {
-        Some(src) => load_str(src, spec),
+        Some(src) => load_str_with(src, spec, options),
         None => Err(SceneError::NotFound {
             spec: spec.to_string(),
             builtins: builtin::names().join(", "),
@@ -48,8 +71,12 @@ pub fn load(spec: &str) -> Result<Scene, SceneError> {
 
 /// Parse and build a scene from TOML text; `file` names it in errors.
 pub fn load_str(src: &str, file: &str) -> Result<Scene, SceneError> {
+    load_str_with(src, file, &BuildOptions::default())
+}
+
+pub fn load_str_with(src: &str, file: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
     let desc = parse(src, file)?;
-    build(&desc, src, file)
+    build(&desc, src, file, options)
 }
 
 pub fn parse(src: &str, file: &str) -> Result<SceneDesc, SceneError> {
@@ -67,49 +94,156 @@ pub fn parse(src: &str, file: &str) -> Result<SceneDesc, SceneError> {
     })
 }
 
-fn build(desc: &SceneDesc, src: &str, file: &str) -> Result<Scene, SceneError> {
-    let started = Instant::now();
-    check_render_size(desc, src, file)?;
-    let camera = build_camera(desc, src, file)?;
+/// Collects primitives, their materials and the lights among them.
+struct Builder<'a> {
+    src: &'a str,
+    file: &'a str,
+    names: HashSet<String>,
+    materials: Vec<Material>,
+    prims: Vec<Primitive>,
+    lights: Vec<Light>,
+    mesh_triangles: u64,
+}
 
-    let mut names: HashMap<&str, ()> = HashMap::new();
-    let mut materials = Vec::new();
-    let mut prims = Vec::new();
-    let mut lights = Vec::new();
-    for (i, s) in desc.sphere.iter().enumerate() {
-        if let Some(name) = &s.name {
-            if names.insert(name.get_ref().as_str(), ()).is_some() {
-                return Err(SceneError::at(
-                    file,
-                    src,
+impl Builder<'_> {
+    fn err(&self, span: Option<Range<usize>>, field: String, msg: impl Into<String>) -> SceneError {
+        SceneError::at(self.file, self.src, span, Some(field), msg)
+    }
+
+    /// Register an object's name (unique across all object kinds).
+    fn name(&mut self, name: &Option<Spanned<String>>, object: &str) -> Result<(), SceneError> {
+        if let Some(name) = name {
+            if !self.names.insert(name.get_ref().clone()) {
+                return Err(self.err(
                     Some(name.span()),
-                    Some(format!("sphere[{i}].name")),
+                    format!("{object}.name"),
                     format!("duplicate object name `{}`", name.get_ref()),
                 ));
             }
         }
-        let material = build_material(&s.material(), src, file, &format!("sphere[{i}]"))?;
-        let sphere = Sphere::new(DVec3::from_array(s.center.0), s.radius.0);
-        let prim = prims.len() as u32;
-        let light = if material.is_emissive() {
-            lights.push(Light::Sphere(SphereLight {
-                prim,
-                sphere,
-                emission: material.emission,
-            }));
-            Some(lights.len() as u32 - 1)
-        } else {
-            None
-        };
-        prims.push(Primitive {
-            shape: Shape::Sphere(sphere),
-            material: materials.len() as u32,
-            light,
-        });
-        materials.push(material);
+        Ok(())
     }
 
-    let accel = Accel::Flat(crate::accel::lanes::SphereLanes::new(&prims));
+    fn material(&mut self, m: &MaterialDesc, object: &str) -> Result<u32, SceneError> {
+        let material = build_material(m, self.src, self.file, object)?;
+        self.materials.push(material);
+        Ok(self.materials.len() as u32 - 1)
+    }
+
+    /// Add shapes sharing material `material`; emissive ones become lights.
+    fn add(&mut self, shapes: impl IntoIterator<Item = Shape>, material: u32) {
+        let m = self.materials[material as usize];
+        for shape in shapes {
+            let prim = self.prims.len() as u32;
+            let light = if m.is_emissive() {
+                self.lights.push(match shape {
+                    Shape::Sphere(sphere) => Light::Sphere(SphereLight {
+                        prim,
+                        sphere,
+                        emission: m.emission,
+                    }),
+                    Shape::Triangle(triangle) => Light::Triangle(TriangleLight {
+                        prim,
+                        triangle,
+                        emission: m.emission,
+                    }),
+                });
+                Some(self.lights.len() as u32 - 1)
+            } else {
+                None
+            };
+            self.prims.push(Primitive {
+                shape,
+                material,
+                light,
+            });
+        }
+    }
+}
+
+fn build(
+    desc: &SceneDesc,
+    src: &str,
+    file: &str,
+    options: &BuildOptions,
+) -> Result<Scene, SceneError> {
+    let started = Instant::now();
+    check_render_size(desc, src, file)?;
+    let camera = build_camera(desc, src, file)?;
+    let mut b = Builder {
+        src,
+        file,
+        names: HashSet::new(),
+        materials: Vec::new(),
+        prims: Vec::new(),
+        lights: Vec::new(),
+        mesh_triangles: 0,
+    };
+    for (i, s) in desc.sphere.iter().enumerate() {
+        let object = format!("sphere[{i}]");
+        b.name(&s.name, &object)?;
+        let material = b.material(&s.material(), &object)?;
+        let sphere = Sphere::new(DVec3::from_array(s.center.0), s.radius.0);
+        b.add([Shape::Sphere(sphere)], material);
+    }
+    for (i, t) in desc.triangle.iter().enumerate() {
+        let object = format!("triangle[{i}]");
+        b.name(&t.name, &object)?;
+        let [p0, p1, p2] = t.vertices.get_ref().map(|v| DVec3::from_array(v.0));
+        let tri = Triangle::new(p0, p1, p2);
+        if tri.normal().is_none() {
+            return Err(b.err(
+                Some(t.vertices.span()),
+                format!("{object}.vertices"),
+                "the vertices are collinear: the triangle has no area",
+            ));
+        }
+        let material = b.material(&t.material(), &object)?;
+        b.add([Shape::Triangle(tri)], material);
+    }
+    for (i, q) in desc.quad.iter().enumerate() {
+        let object = format!("quad[{i}]");
+        b.name(&q.name, &object)?;
+        let c = DVec3::from_array(q.corner.0);
+        let (e1, e2) = (
+            DVec3::from_array(q.edge1.0),
+            DVec3::from_array(q.edge2.get_ref().0),
+        );
+        let (t1, t2) = (
+            Triangle::new(c, c + e1, c + e1 + e2),
+            Triangle::new(c, c + e1 + e2, c + e2),
+        );
+        if t1.normal().is_none() || t2.normal().is_none() {
+            return Err(b.err(
+                Some(q.edge2.span()),
+                format!("{object}.edge2"),
+                "the edges are parallel (or zero): the quad has no area",
+            ));
+        }
+        let material = b.material(&q.material(), &object)?;
+        b.add([Shape::Triangle(t1), Shape::Triangle(t2)], material);
+    }
+    for (i, m) in desc.mesh.iter().enumerate() {
+        let object = format!("mesh[{i}]");
+        b.name(&m.name, &object)?;
+        let tris = build_mesh(&mut b, m, &object, options)?;
+        let material = b.material(&m.material(), &object)?;
+        b.add(tris.into_iter().map(Shape::Triangle), material);
+    }
+
+    let Builder {
+        materials,
+        prims,
+        lights,
+        ..
+    } = b;
+    let choice = options.accel.or(desc.accel).unwrap_or_default();
+    // Probe with the camera's rays at the image's aspect ratio: 32 rows are plenty to tell
+    // boxes that separate the objects from boxes that do not, at a cost of microseconds.
+    let size = RenderSettings::merged(&[&desc.render]);
+    let nx = ((32 * size.width) / size.height.max(1)).clamp(1, 128);
+    let probe = camera_probe(&camera, nx, 32);
+    let (accel, why) = Accel::build(choice, &prims, &probe);
     let lights = Lights::new(lights);
     let light_sampling = match lights.len() {
         0 => "off (no emitters)".to_string(),
@@ -117,7 +251,7 @@ fn build(desc: &SceneDesc, src: &str, file: &str) -> Result<Scene, SceneError> {
         n => format!("{n} emitters, chosen by power"),
     };
     let report = BuildReport {
-        accel: accel.describe(prims.len()),
+        accel: format!("{} ({why})", accel.describe(prims.len())),
         light_sampling,
         build_time: started.elapsed(),
     };
@@ -136,36 +270,83 @@ fn build(desc: &SceneDesc, src: &str, file: &str) -> Result<Scene, SceneError> {
     })
 }
 
-/// A `[render]` size whose film cannot fit in the available memory is an error of the scene file,
-/// reported at its `width` (or `height`) with the memory it would need. Every other setting was
-/// range-checked as it was read.
-fn check_render_size(desc: &SceneDesc, src: &str, file: &str) -> Result<(), SceneError> {
-    let r = &desc.render;
-    if r.width.is_none() && r.height.is_none() {
-        return Ok(());
-    }
-    let Err(message) = RenderSettings::merged(&[r]).validate() else {
-        return Ok(());
+/// The triangles of one `[[mesh]]`, transformed.
+fn build_mesh(
+    b: &mut Builder,
+    m: &MeshDesc,
+    object: &str,
+    options: &BuildOptions,
+) -> Result<Vec<Triangle>, SceneError> {
+    let room = MAX_MESH_TRIANGLES.saturating_sub(b.mesh_triangles);
+    let tris = match (&m.path, &m.torus_knot) {
+        (Some(path), None) => {
+            let full = match &options.base_dir {
+                Some(base) => base.join(path.get_ref()),
+                None => PathBuf::from(path.get_ref()),
+            };
+            mesh::load_obj(&full, room).map_err(|msg| {
+                b.err(
+                    Some(path.span()),
+                    format!("{object}.path"),
+                    format!("{}: {msg}", full.display()),
+                )
+            })?
+        }
+        (None, Some(knot)) => {
+            let k = knot.get_ref();
+            let knot_gen = TorusKnot {
+                p: k.p,
+                q: k.q,
+                segments: k.segments,
+                sides: k.sides,
+                tube: k.tube.0,
+            };
+            let field = format!("{object}.torus_knot");
+            if k.p == 0 || k.q == 0 || k.segments < 3 || k.sides < 3 {
+                return Err(b.err(
+                    Some(knot.span()),
+                    field,
+                    "p and q must be at least 1, segments and sides at least 3",
+                ));
+            }
+            if knot_gen.triangle_count() > room {
+                return Err(b.err(
+                    Some(knot.span()),
+                    field,
+                    format!(
+                        "{} triangles: more than the {room} this scene has room for \
+                         (at most {MAX_MESH_TRIANGLES} mesh triangles per scene)",
+                        knot_gen.triangle_count()
+                    ),
+                ));
+            }
+            knot_gen.triangles()
+        }
+        (Some(path), Some(_)) => {
+            return Err(b.err(
+                Some(path.span()),
+                format!("{object}.path"),
+                "give either `path` or `torus_knot`, not both",
+            ))
+        }
+        (None, None) => {
+            return Err(b.err(
+                None,
+                object.to_string(),
+                "a mesh needs `path` (an OBJ file) or `torus_knot`",
+            ))
+        }
     };
-    let key = if r.width.is_some() { "width" } else { "height" };
-    Err(SceneError::at(
-        file,
-        src,
-        value_span(src, &["render", key]),
-        Some(format!("render.{key}")),
-        message,
-    ))
-}
-
-/// Byte span of the value at a key path (`["render", "width"]`) in TOML text.
-fn value_span(src: &str, path: &[&str]) -> Option<std::ops::Range<usize>> {
-    let doc = toml::de::DeTable::parse(src).ok()?;
-    let (last, parents) = path.split_last()?;
-    let mut table = doc.get_ref();
-    for key in parents {
-        table = table.get(*key)?.get_ref().as_table()?;
-    }
-    Some(table.get(*last)?.span())
+    let transform = Transform {
+        scale: m.scale.map_or(1.0, |s| s.0),
+        rotate_degrees: m.rotate.map_or(DVec3::ZERO, |r| DVec3::from_array(r.0)),
+        translate: m.translate.map_or(DVec3::ZERO, |t| DVec3::from_array(t.0)),
+    };
+    let tris = transform
+        .apply(&tris)
+        .map_err(|msg| b.err(None, object.to_string(), msg))?;
+    b.mesh_triangles += tris.len() as u64;
+    Ok(tris)
 }
 
 fn build_camera(desc: &SceneDesc, src: &str, file: &str) -> Result<Camera, SceneError> {
@@ -259,4 +440,36 @@ fn build_material(
         color,
         emission,
     })
+}
+
+/// A `[render]` size whose film cannot fit in the available memory is an error of the scene file,
+/// reported at its `width` (or `height`) with the memory it would need. Every other setting was
+/// range-checked as it was read.
+fn check_render_size(desc: &SceneDesc, src: &str, file: &str) -> Result<(), SceneError> {
+    let r = &desc.render;
+    if r.width.is_none() && r.height.is_none() {
+        return Ok(());
+    }
+    let Err(message) = crate::settings::RenderSettings::merged(&[r]).validate() else {
+        return Ok(());
+    };
+    let key = if r.width.is_some() { "width" } else { "height" };
+    Err(SceneError::at(
+        file,
+        src,
+        value_span(src, &["render", key]),
+        Some(format!("render.{key}")),
+        message,
+    ))
+}
+
+/// Byte span of the value at a key path (`["render", "width"]`) in TOML text.
+fn value_span(src: &str, path: &[&str]) -> Option<std::ops::Range<usize>> {
+    let doc = toml::de::DeTable::parse(src).ok()?;
+    let (last, parents) = path.split_last()?;
+    let mut table = doc.get_ref();
+    for key in parents {
+        table = table.get(*key)?.get_ref().as_table()?;
+    }
+    Some(table.get(*last)?.span())
 }

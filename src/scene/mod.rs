@@ -5,10 +5,11 @@ pub mod builtin;
 pub mod description;
 pub mod error;
 pub mod load;
+pub mod mesh;
 
 use crate::accel::Accel;
 use crate::camera::Camera;
-use crate::geometry::{Aabb, Hit, Sphere};
+use crate::geometry::{Aabb, Hit, Sphere, Triangle};
 use crate::light::Lights;
 use crate::material::Material;
 use crate::math::{DVec3, Ray};
@@ -16,12 +17,13 @@ use crate::settings::SettingsOverrides;
 use std::time::Duration;
 
 pub use error::SceneError;
-pub use load::{load, load_str};
+pub use load::{load, load_str, load_str_with, load_with, BuildOptions};
 
 /// A geometric shape; a closed set dispatched by `match`.
 #[derive(Clone, Copy, Debug)]
 pub enum Shape {
     Sphere(Sphere),
+    Triangle(Triangle),
 }
 
 impl Shape {
@@ -29,6 +31,7 @@ impl Shape {
     pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<f64> {
         match self {
             Shape::Sphere(s) => s.intersect(ray, t_max),
+            Shape::Triangle(t) => t.intersect(ray, t_max),
         }
     }
 
@@ -36,12 +39,14 @@ impl Shape {
     pub fn hit(&self, ray: &Ray, t: f64, prim: u32) -> Hit {
         match self {
             Shape::Sphere(s) => s.hit(ray, t, prim),
+            Shape::Triangle(tri) => tri.hit(ray, t, prim),
         }
     }
 
     pub fn bounds(&self) -> Aabb {
         match self {
             Shape::Sphere(s) => s.bounds(),
+            Shape::Triangle(t) => t.bounds(),
         }
     }
 }
