@@ -16,6 +16,7 @@
 
 use crate::geometry::Triangle;
 use crate::math::DVec3;
+use crate::scene::description::MAX_MAGNITUDE;
 use glam::DMat3;
 use std::path::Path;
 
@@ -101,9 +102,21 @@ pub fn load_obj(path: &Path, limit: u64) -> Result<Vec<Triangle>, String> {
         let pos = &model.mesh.positions;
         let vertex = |i: u32| -> Result<DVec3, String> {
             let i = i as usize;
-            pos.get(3 * i..3 * i + 3)
+            let v = pos
+                .get(3 * i..3 * i + 3)
                 .map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
-                .ok_or_else(|| format!("face vertex index {} out of range", i + 1))
+                .ok_or_else(|| format!("face vertex index {} out of range", i + 1))?;
+            // The same bound the scene file puts on coordinates: NaN, inf or 1e38 would turn
+            // into NaN bounds and invalid samples inside the renderer.
+            if !v.is_finite() || v.abs().max_element() > MAX_MAGNITUDE {
+                return Err(format!(
+                    "vertex {} has coordinates {:?}: each must be a finite number of magnitude \
+                     at most {MAX_MAGNITUDE:e}",
+                    i + 1,
+                    v.to_array()
+                ));
+            }
+            Ok(v)
         };
         for f in model.mesh.indices.chunks_exact(3) {
             tris.push(Triangle::new(vertex(f[0])?, vertex(f[1])?, vertex(f[2])?));
