@@ -88,26 +88,7 @@ pub fn radiance(
         let paint_here = paints(material) && stream.paints(depth);
 
         if nee && !material.is_delta() {
-            let u_light = sampler.get_1d();
-            let u = sampler.get_2d();
-            if let Some(ls) = scene.lights.sample(hit.p, u_light, u) {
-                let e = material.eval(wo, ls.wi, hit.n);
-                if e.f_cos.max_element() > 0.0 && ls.pdf > 0.0 {
-                    // Visible if the first hit along the shadow ray is the sampled light itself.
-                    let shadow = Ray::new(spawn_origin(hit.p, hit.n, hit.err, ls.wi), ls.wi);
-                    if scene
-                        .intersect(&shadow, f64::INFINITY)
-                        .is_some_and(|h| h.prim == ls.prim)
-                    {
-                        let w = if paint_here {
-                            1.0
-                        } else {
-                            power_heuristic(ls.pdf, e.pdf)
-                        };
-                        l += beta * e.f_cos * ls.le * (w / ls.pdf);
-                    }
-                }
-            }
+            l += beta * super::path::direct_light(scene, &hit, wo, material, sampler, !paint_here);
         } else if nee {
             // Keep the dimension count per bounce fixed, exactly as `path` does.
             sampler.get_1d();

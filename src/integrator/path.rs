@@ -9,6 +9,7 @@
 
 use super::russian_roulette;
 use crate::geometry::{spawn_origin, Hit};
+use crate::material::Material;
 use crate::math::{DVec3, Ray};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
@@ -47,24 +48,7 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         let wo = -ray.d;
 
         if nee && !material.is_delta() {
-            let u_light = sampler.get_1d();
-            let u = sampler.get_2d();
-            if let Some(ls) = scene.lights.sample(hit.p, u_light, u) {
-                let e = material.eval(wo, ls.wi, hit.n);
-                if e.f_cos.max_element() > 0.0 && ls.pdf > 0.0 {
-                    // Visible if the first thing along the shadow ray is the sampled light
-                    // itself: no distance tolerance, so light cannot leak where a light sphere
-                    // grazes a wall (smallpt's ceiling).
-                    let shadow = shadow_ray(scene, &hit, ls.wi, ls.prim);
-                    if scene
-                        .intersect(&shadow, f64::INFINITY)
-                        .is_some_and(|h| h.prim == ls.prim)
-                    {
-                        let w = power_heuristic(ls.pdf, e.pdf);
-                        l += beta * e.f_cos * ls.le * (w / ls.pdf);
-                    }
-                }
-            }
+            l += beta * direct_light(scene, &hit, wo, material, sampler, true);
         } else if nee {
             // Keep the dimension count per bounce fixed so samplers stay aligned.
             sampler.get_1d();
@@ -87,6 +71,45 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
     }
     l
+}
+
+/// Next-event estimation at a non-delta vertex: one light chosen by power, a direction towards
+/// it, and its shadow ray. Returns f cos Le w / pdf, without the path throughput. The weight w is
+/// the power heuristic against BSDF sampling when `mis` is set, else 1 (a vertex whose BSDF side
+/// cannot weigh itself, as at painterly bounces). Always draws the same three dimensions.
+#[inline]
+pub(crate) fn direct_light(
+    scene: &Scene,
+    hit: &Hit,
+    wo: DVec3,
+    material: &Material,
+    sampler: &mut Sampler,
+    mis: bool,
+) -> DVec3 {
+    let u_light = sampler.get_1d();
+    let u = sampler.get_2d();
+    let Some(ls) = scene.lights.sample(hit.p, u_light, u) else {
+        return DVec3::ZERO;
+    };
+    let e = material.eval(wo, ls.wi, hit.n);
+    if e.f_cos.max_element() <= 0.0 || ls.pdf <= 0.0 {
+        return DVec3::ZERO;
+    }
+    // Visible if the first thing along the shadow ray is the sampled light itself: no distance
+    // tolerance, so light cannot leak where a light sphere grazes a wall (smallpt's ceiling).
+    let shadow = shadow_ray(scene, hit, ls.wi, ls.prim);
+    let visible = scene
+        .intersect(&shadow, f64::INFINITY)
+        .is_some_and(|h| h.prim == ls.prim);
+    if !visible {
+        return DVec3::ZERO;
+    }
+    let w = if mis {
+        power_heuristic(ls.pdf, e.pdf)
+    } else {
+        1.0
+    };
+    e.f_cos * ls.le * (w / ls.pdf)
 }
 
 /// The shadow ray of a light sample: from the offset origin towards the point on the light that
