@@ -157,6 +157,14 @@ impl App {
 
     /// A worker event; returns whether the screen changed.
     pub fn on_worker(&mut self, ev: WorkerEvent) -> bool {
+        let changed = self.on_worker_event(ev);
+        // A new scene's `[render]` table or a rolled-back form may change the integrator, and
+        // with it which fields the form shows.
+        self.form.keep_visible(self.settings().integrator);
+        changed
+    }
+
+    fn on_worker_event(&mut self, ev: WorkerEvent) -> bool {
         match ev {
             WorkerEvent::Started {
                 request,
@@ -260,8 +268,8 @@ impl App {
                 return Some(Action::Quit);
             }
             KeyCode::Char('?') => self.show_help = true,
-            KeyCode::Tab => self.form.select_next(true),
-            KeyCode::BackTab => self.form.select_next(false),
+            KeyCode::Tab => self.form.select_next(true, self.settings().integrator),
+            KeyCode::BackTab => self.form.select_next(false, self.settings().integrator),
             KeyCode::Enter => {
                 let field = self.form.field();
                 if field.cycles() {
@@ -352,6 +360,8 @@ impl App {
                 self.refresh_preview(None);
                 Some(Action::Start(self.request(false)))
             }
+            // Everything else may change the image (integrator, its painterly knobs, sampler,
+            // size, ...): the worker goes on with the film only if it would not.
             _ => Some(Action::Start(self.request(false))),
         }
     }
@@ -389,5 +399,216 @@ impl App {
         let step_y = (g.size.1 / 8).max(1) as f64 * g.sy;
         self.view.center = Some((cx + dx as f64 * step_x, cy + dy as f64 * step_y));
         self.refresh_preview(None);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::SamplerKind;
+    use crate::settings::{Hemisphere, IntegratorKind};
+    use crate::tui::event::Event;
+    use crate::tui::worker::{Command, WorkerHandle};
+    use std::sync::mpsc::{self, Receiver};
+    use std::time::Duration;
+
+    fn key(code: KeyCode) -> KeyEvent {
+        KeyEvent::new(code, KeyModifiers::NONE)
+    }
+
+    /// Press `keys`, collecting the requests the app asks the main loop to start.
+    fn press(app: &mut App, keys: &[KeyCode]) -> Vec<Request> {
+        keys.iter()
+            .filter_map(|&k| match app.on_key(key(k)) {
+                Some(Action::Start(req)) => Some(req),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn typed(text: &str) -> Vec<KeyCode> {
+        text.chars().map(KeyCode::Char).collect()
+    }
+
+    /// Feed the worker's events to the app until a render is done; its snapshot.
+    fn until_done(app: &mut App, rx: &Receiver<Event>) -> Arc<Snapshot> {
+        loop {
+            match rx.recv_timeout(Duration::from_secs(120)) {
+                Ok(Event::Render(ev)) => {
+                    let done = match &ev {
+                        WorkerEvent::Progress(s) if s.status == JobStatus::Done => Some(s.clone()),
+                        WorkerEvent::Failed { message, .. } => panic!("{message}"),
+                        _ => None,
+                    };
+                    app.on_worker(ev);
+                    if let Some(s) = done {
+                        return s;
+                    }
+                }
+                Ok(_) => {}
+                Err(e) => panic!("no finished render: {e}"),
+            }
+        }
+    }
+
+    fn small_app() -> App {
+        let cli = SettingsOverrides {
+            width: Some(16),
+            height: Some(12),
+            spp: Some(2),
+            threads: Some(1),
+            ..Default::default()
+        };
+        App::new(
+            "cornell".into(),
+            cli,
+            ColorChoice::Ansi256,
+            ColorMode::Ansi256,
+            true,
+        )
+    }
+
+    #[test]
+    fn painterly_fields_appear_with_the_integrator_and_validate() {
+        let mut app = small_app();
+        // scene width height spp max-depth: the sixth field is the integrator.
+        press(&mut app, &[KeyCode::Tab; 5]);
+        assert_eq!(app.form.field(), Field::Integrator);
+        press(&mut app, &[KeyCode::Tab]);
+        assert_eq!(
+            app.form.field(),
+            Field::Sampler,
+            "painterly fields hidden for path"
+        );
+        press(&mut app, &[KeyCode::BackTab]);
+        // path -> naive -> painterly, each a request.
+        let reqs = press(&mut app, &[KeyCode::Enter, KeyCode::Enter]);
+        assert_eq!(reqs.len(), 2);
+        assert_eq!(app.settings().integrator, IntegratorKind::Painterly);
+        press(&mut app, &[KeyCode::Tab]);
+        assert_eq!(app.form.field(), Field::Hemisphere);
+        let reqs = press(&mut app, &[KeyCode::Enter]);
+        assert_eq!(
+            reqs[0].layers[1].painterly.hemisphere,
+            Some(Hemisphere::Normal)
+        );
+
+        // A bad stroke is an error message and the edit stays open; a good one is a request.
+        press(&mut app, &[KeyCode::Tab, KeyCode::Tab]);
+        assert_eq!(app.form.field(), Field::Stroke);
+        let mut keys = vec![KeyCode::Enter, KeyCode::Backspace, KeyCode::Backspace];
+        keys.extend(typed("0"));
+        keys.push(KeyCode::Enter);
+        assert!(press(&mut app, &keys).is_empty());
+        assert!(
+            matches!(&app.message, Some(Message::Error(e)) if e.starts_with("stroke:")),
+            "{:?}",
+            app.message
+        );
+        assert_eq!(app.form.editing.as_deref(), Some("0"));
+        let mut keys = vec![KeyCode::Backspace];
+        keys.extend(typed("4"));
+        keys.push(KeyCode::Enter);
+        let reqs = press(&mut app, &keys);
+        assert_eq!(reqs.len(), 1);
+        assert_eq!(reqs[0].layers[1].painterly.stroke, Some(4));
+        assert_eq!(
+            (app.message.clone(), app.form.editing.clone()),
+            (None, None)
+        );
+        assert_eq!(app.settings().painterly.stroke, 4);
+
+        // Back to path: the knobs hide (and keep their values), Tab skips them.
+        press(
+            &mut app,
+            &[KeyCode::BackTab, KeyCode::BackTab, KeyCode::BackTab],
+        );
+        assert_eq!(app.form.field(), Field::Integrator);
+        press(&mut app, &[KeyCode::Enter]);
+        assert_eq!(app.settings().integrator, IntegratorKind::Path);
+        press(&mut app, &[KeyCode::Tab]);
+        assert_eq!(app.form.field(), Field::Sampler);
+        let reqs = press(&mut app, &[KeyCode::Enter]);
+        assert_eq!(reqs[0].layers[1].sampler, Some(SamplerKind::Independent));
+        assert_eq!(app.settings().painterly.stroke, 4);
+    }
+
+    #[test]
+    fn a_rolled_back_integrator_takes_the_selection_off_a_hidden_field() {
+        let mut app = small_app();
+        let first = app.request(true);
+        app.on_worker(WorkerEvent::Started {
+            request: first.id,
+            job: 0,
+            restarted: true,
+            settings: app.settings(),
+            scene_render: SettingsOverrides::default(),
+            scene_name: "cornell".into(),
+            report: String::new(),
+            threads: 1,
+        });
+        press(&mut app, &[KeyCode::Tab; 5]);
+        let reqs = press(&mut app, &[KeyCode::Enter, KeyCode::Enter]);
+        press(
+            &mut app,
+            &[KeyCode::Tab, KeyCode::Tab, KeyCode::Tab, KeyCode::Enter],
+        );
+        assert_eq!(app.form.field(), Field::Stroke);
+        assert_eq!(app.form.editing.as_deref(), Some("16"));
+        // The painterly request fails: the form goes back to path, stroke is hidden again.
+        app.on_worker(WorkerEvent::Failed {
+            request: reqs[1].id,
+            message: "no".into(),
+        });
+        assert_eq!(app.settings().integrator, IntegratorKind::Path);
+        assert_eq!(
+            (app.form.field(), app.form.editing.clone()),
+            (Field::Integrator, None)
+        );
+        assert_eq!(app.message, Some(Message::Error("no".into())));
+    }
+
+    #[test]
+    fn changing_a_painterly_field_or_the_sampler_restarts_the_render() {
+        let (tx, rx) = mpsc::channel();
+        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let mut app = small_app();
+        app.form.overrides.integrator = Some(IntegratorKind::Painterly);
+        worker.send(Command::Start(app.request(true)));
+        let first = until_done(&mut app, &rx);
+
+        // stroke: Tab to it, type a new value.
+        press(&mut app, &[KeyCode::Tab; 8]);
+        assert_eq!(app.form.field(), Field::Stroke);
+        let mut keys = vec![KeyCode::Enter, KeyCode::Backspace, KeyCode::Backspace];
+        keys.extend(typed("3"));
+        keys.push(KeyCode::Enter);
+        let reqs = press(&mut app, &keys);
+        assert_eq!(reqs.len(), 1);
+        worker.send(Command::Start(reqs[0].clone()));
+        let stroke = until_done(&mut app, &rx);
+        assert_ne!(stroke.job, first.job, "a new stroke length is a new film");
+        assert_eq!(stroke.stats.complete_passes, 2);
+
+        // sampler: two fields further, cycles.
+        press(&mut app, &[KeyCode::Tab, KeyCode::Tab]);
+        assert_eq!(app.form.field(), Field::Sampler);
+        let reqs = press(&mut app, &[KeyCode::Enter]);
+        worker.send(Command::Start(reqs[0].clone()));
+        let sampler = until_done(&mut app, &rx);
+        assert_ne!(sampler.job, stroke.job, "a new sampler is a new film");
+        assert_eq!(app.settings().sampler, SamplerKind::Independent);
+
+        // spp, for contrast: the film goes on.
+        press(&mut app, &[KeyCode::BackTab; 7]);
+        assert_eq!(app.form.field(), Field::Spp);
+        let mut keys = vec![KeyCode::Enter, KeyCode::Backspace];
+        keys.extend(typed("3"));
+        keys.push(KeyCode::Enter);
+        let reqs = press(&mut app, &keys);
+        worker.send(Command::Start(reqs[0].clone()));
+        let more = until_done(&mut app, &rx);
+        assert_eq!((more.job, more.stats.complete_passes), (sampler.job, 3));
+        worker.shutdown();
     }
 }

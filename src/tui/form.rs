@@ -1,8 +1,15 @@
 //! The parameter form: its fields, how each is shown, and how typed text becomes a settings
 //! override (the form is the last layer of the settings merge: scene file, CLI, form).
+//!
+//! The painterly integrator's knobs are fields of their own, listed right below the integrator
+//! and shown only while it is `painterly` (they do nothing for the others).
 
 use super::color::{ColorChoice, ColorMode};
-use crate::settings::{IntegratorKind, RenderSettings, SettingsOverrides, Tonemap, MAX_DIMENSION};
+use crate::integrator::painterly::params::{check_range, parse_unit, MAX_STROKE};
+use crate::sampling::SamplerKind;
+use crate::settings::{
+    Hemisphere, IntegratorKind, RenderSettings, SettingsOverrides, Tonemap, MAX_DIMENSION,
+};
 use clap::ValueEnum;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -13,6 +20,11 @@ pub enum Field {
     Spp,
     MaxDepth,
     Integrator,
+    Hemisphere,
+    Correlation,
+    Stroke,
+    Strength,
+    Sampler,
     Seed,
     Exposure,
     Tonemap,
@@ -22,13 +34,18 @@ pub enum Field {
 }
 
 impl Field {
-    pub const ALL: [Field; 12] = [
+    pub const ALL: [Field; 17] = [
         Field::Scene,
         Field::Width,
         Field::Height,
         Field::Spp,
         Field::MaxDepth,
         Field::Integrator,
+        Field::Hemisphere,
+        Field::Correlation,
+        Field::Stroke,
+        Field::Strength,
+        Field::Sampler,
         Field::Seed,
         Field::Exposure,
         Field::Tonemap,
@@ -45,6 +62,11 @@ impl Field {
             Field::Spp => "spp",
             Field::MaxDepth => "max depth",
             Field::Integrator => "integrator",
+            Field::Hemisphere => "hemisphere",
+            Field::Correlation => "correl.",
+            Field::Stroke => "stroke",
+            Field::Strength => "strength",
+            Field::Sampler => "sampler",
             Field::Seed => "seed",
             Field::Exposure => "exposure",
             Field::Tonemap => "tonemap",
@@ -54,16 +76,49 @@ impl Field {
         }
     }
 
+    /// The field's name in messages (the label, unabbreviated).
+    pub fn name(self) -> &'static str {
+        match self {
+            Field::Correlation => "correlation",
+            Field::TargetError => "target error",
+            _ => self.label(),
+        }
+    }
+
     /// Fields with a small set of values cycle on Enter instead of opening a text edit.
     pub fn cycles(self) -> bool {
-        matches!(self, Field::Integrator | Field::Tonemap | Field::Color)
+        matches!(
+            self,
+            Field::Integrator | Field::Hemisphere | Field::Sampler | Field::Tonemap | Field::Color
+        )
+    }
+
+    /// A knob of the painterly integrator (shown only while it is selected).
+    pub fn painterly(self) -> bool {
+        matches!(
+            self,
+            Field::Hemisphere | Field::Correlation | Field::Stroke | Field::Strength
+        )
+    }
+
+    /// Whether the form shows this field when `integrator` is in effect.
+    pub fn shown_for(self, integrator: IntegratorKind) -> bool {
+        !self.painterly() || integrator == IntegratorKind::Painterly
+    }
+
+    /// The fields shown when `integrator` is in effect, in order.
+    pub fn visible(integrator: IntegratorKind) -> impl Iterator<Item = Field> {
+        Field::ALL
+            .into_iter()
+            .filter(move |f| f.shown_for(integrator))
     }
 }
 
 /// The form's state: which field is selected, the edit in progress, and the values set.
 #[derive(Clone, Debug)]
 pub struct Form {
-    pub selected: usize,
+    /// Always one of [`Field::visible`] for the integrator in effect (see [`Form::keep_visible`]).
+    pub selected: Field,
     /// Text being typed into the selected field.
     pub editing: Option<String>,
     pub scene: String,
@@ -82,7 +137,7 @@ pub struct Shown<'a> {
 impl Form {
     pub fn new(scene: String, color: ColorChoice) -> Form {
         Form {
-            selected: 0,
+            selected: Field::Scene,
             editing: None,
             scene,
             overrides: SettingsOverrides::default(),
@@ -91,12 +146,35 @@ impl Form {
     }
 
     pub fn field(&self) -> Field {
-        Field::ALL[self.selected]
+        self.selected
     }
 
-    pub fn select_next(&mut self, forward: bool) {
+    /// Select the next (or previous) field shown for `integrator`, wrapping around.
+    pub fn select_next(&mut self, forward: bool, integrator: IntegratorKind) {
         let n = Field::ALL.len();
-        self.selected = (self.selected + if forward { 1 } else { n - 1 }) % n;
+        let mut i = Field::ALL
+            .iter()
+            .position(|&f| f == self.selected)
+            .unwrap_or(0);
+        for _ in 0..n {
+            i = (i + if forward { 1 } else { n - 1 }) % n;
+            if Field::ALL[i].shown_for(integrator) {
+                break;
+            }
+        }
+        self.selected = Field::ALL[i];
+    }
+
+    /// If the selected field is no longer shown (the integrator changed under it: a failed
+    /// request was rolled back, or a scene file chose another one), select the integrator and
+    /// drop the edit in progress. Returns whether the selection moved.
+    pub fn keep_visible(&mut self, integrator: IntegratorKind) -> bool {
+        if self.selected.shown_for(integrator) {
+            return false;
+        }
+        self.selected = Field::Integrator;
+        self.editing = None;
+        true
     }
 
     /// The value of `field` as shown (and as an edit starts from).
@@ -109,6 +187,11 @@ impl Form {
             Field::Spp => s.spp.to_string(),
             Field::MaxDepth => s.max_depth.map_or("none".into(), |d| d.to_string()),
             Field::Integrator => s.integrator.name().into(),
+            Field::Hemisphere => s.painterly.hemisphere.name().into(),
+            Field::Correlation => s.painterly.correlation.to_string(),
+            Field::Stroke => s.painterly.stroke.to_string(),
+            Field::Strength => s.painterly.strength.to_string(),
+            Field::Sampler => s.sampler.name().into(),
             Field::Seed => s.seed.to_string(),
             Field::Exposure => s.exposure.to_string(),
             Field::Tonemap => s.tonemap.name().into(),
@@ -141,6 +224,13 @@ impl Form {
             Field::Integrator => {
                 self.overrides.integrator = Some(next::<IntegratorKind>(&now.settings.integrator))
             }
+            Field::Hemisphere => {
+                self.overrides.painterly.hemisphere =
+                    Some(next::<Hemisphere>(&now.settings.painterly.hemisphere))
+            }
+            Field::Sampler => {
+                self.overrides.sampler = Some(next::<SamplerKind>(&now.settings.sampler))
+            }
             Field::Tonemap => self.overrides.tonemap = Some(next::<Tonemap>(&now.settings.tonemap)),
             Field::Color => self.color = next::<ColorChoice>(&self.color),
             _ => {}
@@ -151,7 +241,7 @@ impl Form {
     pub fn commit(&mut self, field: Field, text: &str) -> Result<(), String> {
         let t = text.trim();
         let o = &mut self.overrides;
-        let err = |what: &str| format!("{}: {what}, got `{t}`", field.label());
+        let err = |what: &str| format!("{}: {what}, got `{t}`", field.name());
         let off =
             t.is_empty() || ["none", "off", "auto"].contains(&t.to_ascii_lowercase().as_str());
         match field {
@@ -186,6 +276,25 @@ impl Form {
                         .map_err(|_| err("a whole number of bounces or `none`"))?,
                 )
             }
+            // The CLI's parsers and ranges (`--correlation`, `--strength`, `--stroke`).
+            Field::Correlation | Field::Strength => {
+                let v = parse_unit(t).map_err(|_| err("a number from 0 to 1"))?;
+                if field == Field::Correlation {
+                    o.painterly.correlation = Some(v)
+                } else {
+                    o.painterly.strength = Some(v)
+                }
+            }
+            Field::Stroke => {
+                o.painterly.stroke = Some(
+                    t.parse::<u32>()
+                        .ok()
+                        .and_then(|v| check_range(v, 1, MAX_STROKE).ok())
+                        .ok_or_else(|| {
+                            err(&format!("a whole number of pixels from 1 to {MAX_STROKE}"))
+                        })?,
+                )
+            }
             Field::Seed => o.seed = Some(t.parse::<u64>().map_err(|_| err("a whole number"))?),
             Field::Exposure => {
                 o.exposure = Some(
@@ -213,7 +322,11 @@ impl Form {
                         .ok_or_else(|| err("a relative error > 0 (e.g. 0.01) or `off`"))?,
                 )
             }
-            Field::Integrator | Field::Tonemap | Field::Color => {}
+            Field::Integrator
+            | Field::Hemisphere
+            | Field::Sampler
+            | Field::Tonemap
+            | Field::Color => {}
         }
         Ok(())
     }
@@ -258,5 +371,87 @@ mod tests {
         assert_eq!(f.color, ColorChoice::Truecolor);
         assert_eq!(f.value(Field::Threads, &shown(&s)), "auto (2)");
         assert_eq!(f.value(Field::TargetError, &shown(&s)), "off");
+        f.cycle(Field::Sampler, &shown(&s));
+        assert_eq!(f.overrides.sampler, Some(SamplerKind::Independent));
+        f.cycle(Field::Hemisphere, &shown(&s));
+        assert_eq!(f.overrides.painterly.hemisphere, Some(Hemisphere::Normal));
+        // Both wrap around to their first value.
+        let s = RenderSettings::merged(&[&f.overrides]);
+        f.cycle(Field::Sampler, &shown(&s));
+        f.cycle(Field::Hemisphere, &shown(&s));
+        assert_eq!(f.overrides.sampler, Some(SamplerKind::Sobol));
+        assert_eq!(f.overrides.painterly.hemisphere, Some(Hemisphere::WorldZ));
+    }
+
+    #[test]
+    fn painterly_fields_take_the_cli_ranges() {
+        let mut f = Form::new("smallpaint".into(), ColorChoice::Auto);
+        f.commit(Field::Correlation, " 0.25 ").unwrap();
+        f.commit(Field::Strength, "0").unwrap();
+        f.commit(Field::Stroke, "1").unwrap();
+        assert_eq!(f.overrides.painterly.correlation, Some(0.25));
+        assert_eq!(f.overrides.painterly.strength, Some(0.0));
+        assert_eq!(f.overrides.painterly.stroke, Some(1));
+        f.commit(Field::Strength, "1").unwrap();
+        f.commit(Field::Stroke, &MAX_STROKE.to_string()).unwrap();
+        assert_eq!(f.overrides.painterly.strength, Some(1.0));
+        assert_eq!(f.overrides.painterly.stroke, Some(MAX_STROKE));
+        for (field, bad) in [
+            (Field::Correlation, "1.5"),
+            (Field::Correlation, "-0.1"),
+            (Field::Correlation, "NaN"),
+            (Field::Strength, "inf"),
+            (Field::Strength, "lots"),
+            (Field::Strength, ""),
+            (Field::Stroke, "0"),
+            (Field::Stroke, "4097"),
+            (Field::Stroke, "2.5"),
+            (Field::Stroke, "-3"),
+        ] {
+            let e = f.commit(field, bad).unwrap_err();
+            assert!(e.starts_with(&format!("{}:", field.name())), "{e}");
+            assert!(e.contains(&format!("`{bad}`")), "{e}");
+        }
+        let e = f.commit(Field::Correlation, "2").unwrap_err();
+        assert_eq!(e, "correlation: a number from 0 to 1, got `2`");
+        let e = f.commit(Field::Stroke, "0").unwrap_err();
+        assert_eq!(
+            e,
+            "stroke: a whole number of pixels from 1 to 4096, got `0`"
+        );
+        // A rejected value leaves the last good one.
+        assert_eq!(f.overrides.painterly.strength, Some(1.0));
+        assert_eq!(f.overrides.painterly.stroke, Some(MAX_STROKE));
+        // What the form accepts, the settings accept.
+        RenderSettings::merged(&[&f.overrides]).validate().unwrap();
+        let shown_now = RenderSettings::merged(&[&f.overrides]);
+        assert_eq!(f.value(Field::Correlation, &shown(&shown_now)), "0.25");
+        assert_eq!(f.value(Field::Stroke, &shown(&shown_now)), "4096");
+    }
+
+    #[test]
+    fn painterly_fields_show_only_for_the_painterly_integrator() {
+        let painterly: Vec<Field> = Field::visible(IntegratorKind::Painterly).collect();
+        assert_eq!(painterly, Field::ALL);
+        let path: Vec<Field> = Field::visible(IntegratorKind::Path).collect();
+        assert_eq!(path.len(), Field::ALL.len() - 4);
+        assert!(path.iter().all(|f| !f.painterly()));
+        assert!(path.contains(&Field::Sampler));
+
+        let mut f = Form::new("cornell".into(), ColorChoice::Auto);
+        f.selected = Field::Integrator;
+        f.select_next(true, IntegratorKind::Path);
+        assert_eq!(f.field(), Field::Sampler);
+        f.select_next(false, IntegratorKind::Painterly);
+        assert_eq!(f.field(), Field::Strength);
+        f.editing = Some("0.5".into());
+        // The integrator changed under the selection: back to it, edit dropped.
+        assert!(f.keep_visible(IntegratorKind::Naive));
+        assert_eq!((f.field(), f.editing.clone()), (Field::Integrator, None));
+        assert!(!f.keep_visible(IntegratorKind::Naive));
+        // Wrapping skips hidden fields too.
+        f.selected = Field::Scene;
+        f.select_next(false, IntegratorKind::Path);
+        assert_eq!(f.field(), Field::TargetError);
     }
 }

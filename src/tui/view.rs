@@ -49,7 +49,8 @@ pub fn layout(area: Rect, app: &App) -> Areas {
         Constraint::Length(2),
     ])
     .areas(area);
-    let form_w = (area.width / 3).clamp(20, 30);
+    // At least 22 columns: a 10-column label, a space, and a value as long as `painterly`.
+    let form_w = (area.width / 3).clamp(22, 30);
     let [form, right] =
         Layout::horizontal([Constraint::Length(form_w), Constraint::Min(1)]).areas(body);
     let (preview, chart) = if app.show_chart {
@@ -153,22 +154,32 @@ fn draw_form(frame: &mut Frame, app: &App, area: Rect) {
         color_mode: app.color_mode,
         threads: app.threads,
     };
+    // The painterly knobs only while that integrator is in effect.
+    let fields: Vec<Field> = Field::visible(s.integrator).collect();
+    let index = fields
+        .iter()
+        .position(|&f| f == app.form.selected)
+        .unwrap_or(0);
     // Scroll so the selected field stays visible in short terminals.
     let rows = inner.height.max(1) as usize;
-    let first = app.form.selected.saturating_sub(rows - 1);
+    let first = index.saturating_sub(rows - 1);
     let value_w = (inner.width as usize).saturating_sub(LABEL + 1);
-    let lines: Vec<Line> = Field::ALL
+    let lines: Vec<Line> = fields
         .iter()
-        .enumerate()
         .skip(first)
         .take(rows)
-        .map(|(i, &field)| {
-            let selected = i == app.form.selected;
-            let (value, style) = match (&app.form.editing, selected) {
-                (Some(text), true) => (format!("{text}_"), Style::new().yellow().bold()),
-                _ => (app.form.value(field, &now), Style::new()),
+        .map(|&field| {
+            let selected = field == app.form.selected;
+            let value = match (&app.form.editing, selected) {
+                (Some(text), true) => Span::styled(
+                    clip_left(&format!("{text}_"), value_w),
+                    Style::new().yellow().bold(),
+                ),
+                // A name from a short list reads best by its start, typed text and paths by
+                // their end.
+                _ if field.cycles() => Span::raw(clip_right(&app.form.value(field, &now), value_w)),
+                _ => Span::raw(clip_left(&app.form.value(field, &now), value_w)),
             };
-            let value = clip_left(&value, value_w);
             let label = format!(" {:<w$}", field.label(), w = LABEL - 1);
             let label_style = if selected {
                 Style::new().reversed()
@@ -178,7 +189,7 @@ fn draw_form(frame: &mut Frame, app: &App, area: Rect) {
             Line::from(vec![
                 Span::styled(label, label_style),
                 Span::raw(" "),
-                Span::styled(value, style),
+                value,
             ])
         })
         .collect();
@@ -195,6 +206,18 @@ fn clip_left(s: &str, w: usize) -> String {
     } else {
         let tail: String = s.chars().skip(n - (w - 1)).collect();
         format!("…{tail}")
+    }
+}
+
+/// Keep the start of `s` within `w` columns.
+fn clip_right(s: &str, w: usize) -> String {
+    if s.chars().count() <= w {
+        s.to_string()
+    } else if w == 0 {
+        String::new()
+    } else {
+        let head: String = s.chars().take(w - 1).collect();
+        format!("{head}…")
     }
 }
 
@@ -378,10 +401,13 @@ fn draw_chart(frame: &mut Frame, app: &App, area: Rect) {
 
 const HELP: &[(&str, &str)] = &[
     ("Tab / Shift-Tab", "select a form field"),
+    ("Enter", "edit the field, or cycle one with a few values"),
+    ("", "(integrator, hemisphere, sampler, tonemap, colour)"),
     (
-        "Enter",
-        "edit the field (integrator, tonemap, colour cycle)",
+        "integrator",
+        "painterly shows its hemisphere, correl(ation),",
     ),
+    ("", "stroke and strength fields right below it"),
     (
         "Enter / Esc",
         "while editing: apply / cancel (Ctrl-U clears)",
@@ -510,6 +536,38 @@ mod tests {
     fn main_layout() {
         let app = app(80, 24);
         insta::assert_snapshot!(render(&app).backend());
+    }
+
+    /// The app with the form set to painterly (as if cycled there) and `selected` selected.
+    fn painterly_app(w: u16, h: u16, selected: Field) -> App {
+        let mut app = app(w, h);
+        app.form.overrides.integrator = Some(crate::settings::IntegratorKind::Painterly);
+        app.form.overrides.painterly.stroke = Some(4);
+        app.form.selected = selected;
+        app
+    }
+
+    #[test]
+    fn main_layout_painterly() {
+        let app = painterly_app(80, 24, Field::Stroke);
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn smallest_terminal_scrolls_past_the_painterly_fields() {
+        // The form scrolls so the selected sampler is its last row; names too long for the
+        // value column keep their start.
+        let mut app = painterly_app(MIN_WIDTH, MIN_HEIGHT, Field::Sampler);
+        app.form.overrides.sampler = Some(crate::sampling::SamplerKind::Independent);
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn clipping_keeps_the_end_or_the_start() {
+        assert_eq!(clip_left("scenes/room.toml", 8), "…om.toml");
+        assert_eq!(clip_right("independent", 9), "independ…");
+        assert_eq!(clip_right("sobol", 9), "sobol");
+        assert_eq!(clip_right("sobol", 0), "");
     }
 
     #[test]

@@ -464,6 +464,42 @@ mod tests {
     }
 
     #[test]
+    fn a_painterly_knob_or_the_sampler_restarts_the_render() {
+        let (tx, rx) = mpsc::channel();
+        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        worker.send(Command::Start(request(1, 2, IntegratorKind::Painterly)));
+        let first = until(&rx, JobStatus::Done);
+        // More samples go on with the same film...
+        let mut more = request(2, 3, IntegratorKind::Painterly);
+        worker.send(Command::Start(more.clone()));
+        let same = until(&rx, JobStatus::Done);
+        assert_eq!((same.job, same.stats.complete_passes), (first.job, 3));
+        // ...a new stroke, correlation, strength, hemisphere or sampler is a new image.
+        let mut jobs = vec![first.job];
+        let changes: [fn(&mut SettingsOverrides); 5] = [
+            |o| o.painterly.stroke = Some(4),
+            |o| o.painterly.correlation = Some(0.5),
+            |o| o.painterly.strength = Some(0.5),
+            |o| o.painterly.hemisphere = Some(crate::settings::Hemisphere::Normal),
+            |o| o.sampler = Some(crate::sampling::SamplerKind::Independent),
+        ];
+        for (i, change) in changes.iter().enumerate() {
+            more.id = 3 + i as u64;
+            change(&mut more.layers[0]);
+            worker.send(Command::Start(more.clone()));
+            let new = until(&rx, JobStatus::Done);
+            assert!(
+                !jobs.contains(&new.job),
+                "change {i} went on with job {}",
+                new.job
+            );
+            assert_eq!(new.stats.complete_passes, 3);
+            jobs.push(new.job);
+        }
+        worker.shutdown();
+    }
+
+    #[test]
     fn a_new_request_cancels_a_long_render() {
         let (tx, rx) = mpsc::channel();
         let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
