@@ -62,6 +62,7 @@ pub fn radiance(
     let mut painted = false;
     let paint_depth = max_depth.min(params.depth);
     loop {
+        sampler.count_ray();
         let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
             l += beta * scene.background;
             break;
@@ -95,6 +96,7 @@ pub fn radiance(
                 if e.f_cos.max_element() > 0.0 && ls.pdf > 0.0 {
                     // Visible if the first hit along the shadow ray is the sampled light itself.
                     let shadow = Ray::new(spawn_origin(hit.p, hit.n, hit.err, ls.wi), ls.wi);
+                    sampler.count_ray();
                     if scene
                         .intersect(&shadow, f64::INFINITY)
                         .is_some_and(|h| h.prim == ls.prim)
