@@ -6,7 +6,8 @@
 //! The renders are [`convergence::run_grid`] runs (the same code as `ptui converge`); errors are
 //! read at exactly `--seconds` by log-log interpolation between the checkpoints around it
 //! ([`convergence::error_at`]), speeds and spp at the last checkpoint (the first pass boundary at
-//! or past `--seconds`).
+//! or past `--seconds`). A run too short for that (its second pass, the first with an error
+//! estimate, ends after `--seconds`) reports the errors of its last checkpoint instead.
 
 use super::{HEIGHT, THREADS, WIDTH};
 use crate::convergence::{self, Metric, Series};
@@ -54,26 +55,26 @@ const PLAN: [(&str, bool, &[SamplerKind]); 2] = [
 ];
 const INTEGRATORS: [IntegratorKind; 2] = [IntegratorKind::Path, IntegratorKind::Naive];
 
-pub fn run(seconds: f64, reference: &Path) -> anyhow::Result<()> {
+pub fn run(seconds: f64, reference_path: &Path) -> anyhow::Result<()> {
+    let reference = load_reference(reference_path)?;
     println!(
         "{WIDTH}x{HEIGHT}, {THREADS} threads, errors at {seconds} s of render time; rays = \
          closest-hit queries; RMSE against {}",
-        reference.display()
+        reference_path.display()
     );
     println!("{}", table_header());
-    let bench = measure(seconds, reference, |row| println!("{}", table_row(row)))?;
+    let bench = measure(seconds, &reference, |row| println!("{}", table_row(row)))?;
     print!("{}", ratios(&bench));
     Ok(())
 }
 
 /// Render every combination of [`PLAN`] for `seconds` each, calling `on_row` as each finishes.
-/// Fails before rendering anything if the reference cannot be read or is not 320x240.
+/// `reference` is cornell's, 320x240 ([`load_reference`]).
 pub fn measure(
     seconds: f64,
-    reference_path: &Path,
+    reference: &LinearImage,
     mut on_row: impl FnMut(&ErrorRow),
 ) -> anyhow::Result<ErrorBench> {
-    let reference = load_reference(reference_path)?;
     let pool = build_pool(THREADS)?;
     let cancel = AtomicBool::new(false);
     let mut rows = Vec::new();
@@ -88,7 +89,7 @@ pub fn measure(
                 ..Default::default()
             },
         ]);
-        let reference = measured.then_some(&reference);
+        let reference = measured.then_some(reference);
         let combinations = convergence::combinations(&INTEGRATORS, samplers, base.sampler);
         let series = convergence::run_grid(
             &scene,
@@ -109,13 +110,10 @@ pub fn measure(
     Ok(ErrorBench { seconds, rows })
 }
 
-fn load_reference(path: &Path) -> anyhow::Result<LinearImage> {
-    let r = reference::load(path).with_context(|| {
-        format!(
-            "cannot read the reference image {} (give its path with --reference)",
-            path.display()
-        )
-    })?;
+/// Cornell's reference image, checked to be 320x240.
+pub fn load_reference(path: &Path) -> anyhow::Result<LinearImage> {
+    let r = reference::load(path)
+        .context("bench error needs cornell's reference image (give its path with --reference)")?;
     r.check_size(WIDTH, HEIGHT)
         .with_context(|| format!("{}", path.display()))?;
     Ok(r)
@@ -161,7 +159,9 @@ pub fn table_row(r: &ErrorRow) -> String {
 }
 
 /// Equal-time ratios: on each scene, every other series' error over the first series' (path with
-/// the first sampler), in the metric the scene has (RMSE with a reference, else est. RMSE).
+/// the first sampler), in the metric the scene has (RMSE with a reference, else est. RMSE); and
+/// the same ratio at equal samples per pixel (error x sqrt(spp) at the end), which, unlike the
+/// equal-time one, does not move with the machine's load during each run.
 pub fn ratios(bench: &ErrorBench) -> String {
     let mut out = String::new();
     for (name, measured, _) in PLAN {
@@ -183,6 +183,16 @@ pub fn ratios(bench: &ErrorBench) -> String {
                     other.series.label(),
                     base.series.label(),
                     o / b,
+                    n = metric.name()
+                );
+            }
+            if let Some(ratio) = convergence::per_sample_ratio(&base.series, &other.series, metric)
+            {
+                let _ = writeln!(
+                    out,
+                    "{name}, per sample: {} {n} / {} {n} at equal spp = {ratio:.3}",
+                    other.series.label(),
+                    base.series.label(),
                     n = metric.name()
                 );
             }
@@ -267,12 +277,18 @@ mod tests {
             ),
             "{text}"
         );
+        // Same spp in both (one checkpoint each): the per-sample ratio is the plain one.
+        assert!(
+            text.contains(
+                "cornell, per sample: naive/sobol rmse / path/sobol rmse at equal spp = 2.500"
+            ),
+            "{text}"
+        );
     }
 
     #[test]
     fn a_missing_reference_is_an_error_naming_it() {
-        let err =
-            measure(0.01, Path::new("/nonexistent/cornell.exr"), |_| {}).expect_err("no reference");
+        let err = load_reference(Path::new("/nonexistent/cornell.exr")).expect_err("no reference");
         let msg = format!("{err:#}");
         assert!(
             msg.contains("/nonexistent/cornell.exr") && msg.contains("--reference"),
