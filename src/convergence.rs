@@ -9,6 +9,8 @@
 //!
 //! The CSV columns ([`CSV_HEADER`]):
 //! - `integrator`: its name (`path`, `naive`, ...)
+//! - `sampler`: the sample sequence's name (`sobol`, `independent`); a series is one
+//!   integrator x sampler combination, labelled `integrator/sampler` (e.g. `path/sobol`)
 //! - `seconds`: render wall time so far
 //! - `spp`: complete passes so far (samples per pixel)
 //! - `samples_per_second`: camera samples so far / `seconds`
@@ -16,11 +18,16 @@
 //! - `est_rmse`: the film's own estimate of its RMSE (RMS of the per-pixel standard errors)
 
 use crate::reference::{self, LinearImage};
-use crate::render::{PassOutcome, Renderer};
+use crate::render::{PassOutcome, RenderError, Renderer};
+use crate::sampling::SamplerKind;
+use crate::scene::Scene;
+use crate::settings::{IntegratorKind, RenderSettings};
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
-pub const CSV_HEADER: &str = "integrator,seconds,spp,samples_per_second,rmse,rel_mse,est_rmse";
+pub const CSV_HEADER: &str =
+    "integrator,sampler,seconds,spp,samples_per_second,rmse,rel_mse,est_rmse";
 
 /// The error of a render at one moment.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -28,6 +35,8 @@ pub struct Checkpoint {
     pub seconds: f64,
     pub spp: u32,
     pub samples_per_second: f64,
+    /// Closest-hit queries per second (not in the CSV; `ptui bench error` prints it).
+    pub rays_per_second: f64,
     pub rmse: Option<f64>,
     pub rel_mse: Option<f64>,
     pub est_rmse: f64,
@@ -35,11 +44,19 @@ pub struct Checkpoint {
     pub est_rel_mse: f64,
 }
 
-/// One integrator's checkpoints, in time order.
+/// One integrator x sampler combination's checkpoints, in time order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
     pub integrator: String,
+    pub sampler: String,
     pub points: Vec<Checkpoint>,
+}
+
+impl Series {
+    /// `integrator/sampler`, e.g. `path/sobol`: how summaries and the plot legend name it.
+    pub fn label(&self) -> String {
+        format!("{}/{}", self.integrator, self.sampler)
+    }
 }
 
 /// Which error a fit, a plot line or a comparison uses.
@@ -129,6 +146,7 @@ pub fn measure(r: &Renderer, reference: Option<&LinearImage>) -> Checkpoint {
         seconds: st.elapsed.as_secs_f64(),
         spp: st.complete_passes,
         samples_per_second: st.samples_per_second(),
+        rays_per_second: st.rays_per_second(),
         rmse,
         rel_mse,
         est_rmse: est.rmse,
@@ -167,9 +185,72 @@ pub fn run_series(
     }
     Series {
         integrator: r.settings.integrator.name().to_string(),
+        sampler: r.settings.sampler.name().to_string(),
         points,
     }
 }
+
+/// The combinations a grid run covers, integrators outer, samplers inner (`path/sobol`,
+/// `path/independent`, `naive/sobol`, ...); no samplers means just `default_sampler`.
+pub fn combinations(
+    integrators: &[IntegratorKind],
+    samplers: &[SamplerKind],
+    default_sampler: SamplerKind,
+) -> Vec<(IntegratorKind, SamplerKind)> {
+    let samplers = if samplers.is_empty() {
+        std::slice::from_ref(&default_sampler)
+    } else {
+        samplers
+    };
+    integrators
+        .iter()
+        .flat_map(|&i| samplers.iter().map(move |&s| (i, s)))
+        .collect()
+}
+
+/// One [`run_series`] per combination, each for `seconds` of render time with `base`'s other
+/// settings, one after the other on `pool` (built before any clock starts). `on_checkpoint` sees
+/// the combination and each checkpoint as it is taken.
+#[allow(clippy::too_many_arguments)]
+pub fn run_grid(
+    scene: &Arc<Scene>,
+    base: &RenderSettings,
+    combinations: &[(IntegratorKind, SamplerKind)],
+    reference: Option<&LinearImage>,
+    seconds: f64,
+    pool: &Arc<rayon::ThreadPool>,
+    cancel: &AtomicBool,
+    mut on_checkpoint: impl FnMut((IntegratorKind, SamplerKind), &Checkpoint),
+) -> Result<Vec<Series>, RenderError> {
+    let mut series = Vec::with_capacity(combinations.len());
+    for &(integrator, sampler) in combinations {
+        let settings = RenderSettings {
+            integrator,
+            sampler,
+            // Time, not a sample count, ends these renders.
+            spp: u32::MAX,
+            target_error: None,
+            ..base.clone()
+        };
+        let mut r = Renderer::with_pool(scene.clone(), settings, pool.clone())?;
+        let schedule = Schedule::log_spaced(FIRST_CHECKPOINT, PER_DECADE);
+        series.push(run_series(
+            &mut r,
+            reference,
+            seconds,
+            schedule,
+            cancel,
+            |c| on_checkpoint((integrator, sampler), c),
+        ));
+    }
+    Ok(series)
+}
+
+/// Checkpoints per factor of ten in time for [`run_grid`]: ~20 points over a 20 s run.
+pub const PER_DECADE: u32 = 8;
+/// The first scheduled checkpoint of [`run_grid`]; earlier passes are recorded from the second
+/// one on.
+pub const FIRST_CHECKPOINT: f64 = 0.01;
 
 /// A least-squares line through (ln t, ln err): err ~ exp(intercept) * t^slope.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -296,8 +377,9 @@ pub fn write_csv(w: &mut impl Write, series: &[Series]) -> std::io::Result<()> {
         for c in &s.points {
             writeln!(
                 w,
-                "{},{:.6},{},{:.0},{},{},{:.6e}",
+                "{},{},{:.6},{},{:.0},{},{},{:.6e}",
                 s.integrator,
+                s.sampler,
                 c.seconds,
                 c.spp,
                 c.samples_per_second,
@@ -317,6 +399,7 @@ mod tests {
     fn series(name: &str, pts: &[(f64, f64)]) -> Series {
         Series {
             integrator: name.into(),
+            sampler: "sobol".into(),
             points: pts
                 .iter()
                 .enumerate()
@@ -324,6 +407,7 @@ mod tests {
                     seconds: t,
                     spp: i as u32 + 2,
                     samples_per_second: 1.0,
+                    rays_per_second: 3.0,
                     rmse: Some(e),
                     rel_mse: Some(e * e),
                     est_rmse: e,
@@ -386,7 +470,45 @@ mod tests {
         let text = String::from_utf8(out).unwrap();
         assert_eq!(
             text,
-            format!("{CSV_HEADER}\npath,1.000000,2,1,,,5.000000e-1\n")
+            format!("{CSV_HEADER}\npath,sobol,1.000000,2,1,,,5.000000e-1\n")
+        );
+    }
+
+    #[test]
+    fn csv_names_each_series_sampler_after_its_integrator() {
+        let mut a = series("path", &[(1.0, 0.5)]);
+        let mut b = series("naive", &[(2.0, 0.25)]);
+        a.sampler = "independent".into();
+        b.sampler = "sobol".into();
+        assert_eq!(a.label(), "path/independent");
+        assert_eq!(b.label(), "naive/sobol");
+        let mut out = Vec::new();
+        write_csv(&mut out, &[a, b]).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+        assert_eq!(&rows[0][..3], ["integrator", "sampler", "seconds"]);
+        assert_eq!(&rows[1][..3], ["path", "independent", "1.000000"]);
+        assert_eq!(&rows[2][..3], ["naive", "sobol", "2.000000"]);
+        assert!(rows.iter().all(|r| r.len() == rows[0].len()));
+    }
+
+    #[test]
+    fn combinations_cover_every_integrator_and_sampler_in_order() {
+        use IntegratorKind::{Naive, Path};
+        use SamplerKind::{Independent, Sobol};
+        assert_eq!(
+            combinations(&[Path, Naive], &[Sobol, Independent], Sobol),
+            [
+                (Path, Sobol),
+                (Path, Independent),
+                (Naive, Sobol),
+                (Naive, Independent)
+            ]
+        );
+        // No sampler asked: the default one (the scene's) only.
+        assert_eq!(
+            combinations(&[Naive, Path], &[], Independent),
+            [(Naive, Independent), (Path, Independent)]
         );
     }
 }

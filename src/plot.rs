@@ -1,6 +1,7 @@
-//! The convergence plot: error against render time on log-log axes, one colour per integrator,
-//! its fitted slope in the legend, and a 1/sqrt(t) guide. Drawn with plotters into memory and
-//! encoded as PNG by `image`, so the file is written atomically like every other output.
+//! The convergence plot: error against render time on log-log axes, one colour per series
+//! (labelled `integrator/sampler`), its fitted slope in the legend, and a 1/sqrt(t) guide. Drawn
+//! with plotters into memory and encoded as PNG by `image`, so the file is written atomically
+//! like every other output.
 //!
 //! Text needs a font and a fresh machine may have none, so DejaVu Sans (Bitstream Vera licence,
 //! `assets/DejaVuSans-LICENSE.txt`) is embedded in the binary and registered with plotters.
@@ -17,7 +18,7 @@ const FAMILY: &str = "sans-serif";
 pub const WIDTH: u32 = 1000;
 pub const HEIGHT: u32 = 680;
 
-/// Line colours, one per integrator (colour-blind-safe Okabe-Ito hues).
+/// Line colours, one per series (colour-blind-safe Okabe-Ito hues).
 const COLOURS: [RGBColor; 6] = [
     RGBColor(0, 114, 178),
     RGBColor(213, 94, 0),
@@ -220,7 +221,7 @@ fn draw<'b>(spec: &PlotSpec, buf: &'b mut [u8]) -> DrawResult<'b> {
             if pts.is_empty() {
                 continue;
             }
-            let label = legend_text(&s.integrator, m, fit_series(s, m, spec.fit_from));
+            let label = legend_text(&s.label(), m, fit_series(s, m, spec.fit_from));
             if m == spec.metric {
                 chart
                     .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(3)))?

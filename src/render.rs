@@ -39,6 +39,8 @@ pub struct RenderStats {
     pub complete_passes: u32,
     /// Camera samples computed (valid or not).
     pub samples: u64,
+    /// Closest-hit queries traced for those samples (camera, continuation and shadow rays).
+    pub rays: u64,
     /// NaN or infinite samples dropped before reaching the film.
     pub invalid: u64,
     /// Wall time spent in passes.
@@ -50,6 +52,15 @@ impl RenderStats {
         let s = self.elapsed.as_secs_f64();
         if s > 0.0 {
             self.samples as f64 / s
+        } else {
+            0.0
+        }
+    }
+
+    pub fn rays_per_second(&self) -> f64 {
+        let s = self.elapsed.as_secs_f64();
+        if s > 0.0 {
+            self.rays as f64 / s
         } else {
             0.0
         }
@@ -151,18 +162,20 @@ impl Renderer {
         let band_rows = (settings.height / (threads * 16)).clamp(1, 8);
         let invalid = AtomicU64::new(0);
         let samples = AtomicU64::new(0);
+        let rays = AtomicU64::new(0);
         let film = &mut self.film;
         self.pool.install(|| {
             film.par_bands(band_rows).for_each(|mut band| {
-                let (mut bad, mut done) = (0u64, 0u64);
+                let (mut bad, mut done, mut traced) = (0u64, 0u64, 0u64);
                 for row in 0..band.rows() {
                     if cancel.load(Ordering::Relaxed) {
                         break;
                     }
                     let y = band.first_row + row;
                     for x in 0..settings.width {
-                        let v = sample_pixel(scene, settings, x, y, pass);
+                        let (v, r) = sample_pixel_counted(scene, settings, x, y, pass);
                         done += 1;
+                        traced += r as u64;
                         if v.is_finite() {
                             band.add(x, row, pass, v);
                         } else {
@@ -172,11 +185,13 @@ impl Renderer {
                 }
                 invalid.fetch_add(bad, Ordering::Relaxed);
                 samples.fetch_add(done, Ordering::Relaxed);
+                rays.fetch_add(traced, Ordering::Relaxed);
             })
         });
         let done = samples.into_inner();
         self.stats.samples += done;
         self.stats.invalid += invalid.into_inner();
+        self.stats.rays += rays.into_inner();
         let outcome = if done == settings.pixels() as u64 {
             self.stats.complete_passes += 1;
             if settings.target_error.is_some() {
@@ -207,6 +222,18 @@ impl Renderer {
 /// footprint (box filter) and its radiance.
 #[inline]
 pub fn sample_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, pass: u32) -> DVec3 {
+    sample_pixel_counted(scene, settings, x, y, pass).0
+}
+
+/// [`sample_pixel`] and the number of closest-hit queries its path traced.
+#[inline]
+pub fn sample_pixel_counted(
+    scene: &Scene,
+    settings: &RenderSettings,
+    x: u32,
+    y: u32,
+    pass: u32,
+) -> (DVec3, u32) {
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, pass as u64);
     let (jx, jy) = sampler.get_2d();
@@ -216,11 +243,12 @@ pub fn sample_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, pa
         x as f64 + jx,
         y as f64 + jy,
     );
-    integrator::radiance(
+    let l = integrator::radiance(
         settings,
         scene,
         ray,
         &mut sampler,
         integrator::PixelSample { x, y, pass },
-    )
+    );
+    (l, sampler.rays())
 }

@@ -132,37 +132,37 @@ fn parse_opt(field: &str) -> Option<f64> {
     (!field.is_empty()).then(|| field.parse().expect("a number"))
 }
 
-/// Checks the CSV's columns and order; returns rows as (integrator, seconds, spp, rmse, rel,
-/// est).
+/// Checks the CSV's columns and order; returns rows as (series label `integrator/sampler`,
+/// seconds, spp, rmse, rel, est).
 #[allow(clippy::type_complexity)]
 fn read_csv(path: &std::path::Path) -> Vec<(String, f64, u32, Option<f64>, Option<f64>, f64)> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
     assert_eq!(
         lines.next(),
-        Some("integrator,seconds,spp,samples_per_second,rmse,rel_mse,est_rmse")
+        Some("integrator,sampler,seconds,spp,samples_per_second,rmse,rel_mse,est_rmse")
     );
     assert_eq!(
         CSV_HEADER,
-        "integrator,seconds,spp,samples_per_second,rmse,rel_mse,est_rmse"
+        "integrator,sampler,seconds,spp,samples_per_second,rmse,rel_mse,est_rmse"
     );
     let rows: Vec<_> = lines
         .map(|l| {
             let f: Vec<&str> = l.split(',').collect();
-            assert_eq!(f.len(), 7, "{l}");
-            let sps: f64 = f[3].parse().unwrap();
+            assert_eq!(f.len(), 8, "{l}");
+            let sps: f64 = f[4].parse().unwrap();
             assert!(sps > 0.0, "{l}");
             (
-                f[0].to_string(),
-                f[1].parse().unwrap(),
+                format!("{}/{}", f[0], f[1]),
                 f[2].parse().unwrap(),
-                parse_opt(f[4]),
+                f[3].parse().unwrap(),
                 parse_opt(f[5]),
-                f[6].parse::<f64>().unwrap(),
+                parse_opt(f[6]),
+                f[7].parse::<f64>().unwrap(),
             )
         })
         .collect();
-    // Per integrator: time strictly increasing, spp increasing, at least two samples per pixel.
+    // Per series: time strictly increasing, spp increasing, at least two samples per pixel.
     for w in rows.windows(2) {
         if w[0].0 == w[1].0 {
             assert!(w[1].1 > w[0].1, "time not increasing: {w:?}");
@@ -182,6 +182,7 @@ fn args(output: PathBuf) -> ConvergeArgs {
         seconds: 1.0,
         size: None,
         integrator: vec![IntegratorKind::Path, IntegratorKind::Naive],
+        sampler: vec![],
         threads: None,
         seed: Some(3),
         max_depth: None,
@@ -201,14 +202,15 @@ fn converge_writes_the_documented_csv_and_a_valid_png() {
     .unwrap();
 
     let rows = read_csv(&dir.join("convergence.csv"));
-    for name in ["path", "naive"] {
+    // Without --sampler, the scene's (cornell: the default, sobol).
+    for name in ["path/sobol", "naive/sobol"] {
         let n = rows.iter().filter(|r| r.0 == name).count();
         assert!(n >= 2, "{name}: {n} rows");
     }
     // Integrators in the order asked, each once.
-    let first_naive = rows.iter().position(|r| r.0 == "naive").unwrap();
-    assert!(rows[..first_naive].iter().all(|r| r.0 == "path"));
-    assert!(rows[first_naive..].iter().all(|r| r.0 == "naive"));
+    let first_naive = rows.iter().position(|r| r.0 == "naive/sobol").unwrap();
+    assert!(rows[..first_naive].iter().all(|r| r.0 == "path/sobol"));
+    assert!(rows[first_naive..].iter().all(|r| r.0 == "naive/sobol"));
     // With a reference every row has the measured columns, and they agree with the CSV rows.
     assert!(rows.iter().all(|r| r.3.is_some() && r.4.is_some()));
     assert_eq!(
@@ -248,8 +250,56 @@ fn converge_without_a_reference_leaves_the_measured_columns_empty() {
     assert!(rows.len() >= 2);
     assert!(rows
         .iter()
-        .all(|r| r.0 == "naive" && r.3.is_none() && r.4.is_none()));
+        .all(|r| r.0 == "naive/sobol" && r.3.is_none() && r.4.is_none()));
     image::open(dir.join("convergence.png")).expect("a valid PNG");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--sampler sobol,independent` with two integrators: four series, integrators outer, each
+/// labelled `integrator/sampler` in the CSV, the summary and (one colour each) the plot, with the
+/// ratios taken against the first.
+#[test]
+fn converge_runs_every_integrator_sampler_combination() {
+    use ptui::sampling::SamplerKind;
+    let _serial = serial();
+    let dir = temp_dir("samplers");
+    let report = converge(&ConvergeArgs {
+        size: Some((40, 30)),
+        seconds: 0.2,
+        sampler: vec![SamplerKind::Sobol, SamplerKind::Independent],
+        ..args(dir.clone())
+    })
+    .unwrap();
+    let labels: Vec<String> = report.series.iter().map(|s| s.label()).collect();
+    let want = [
+        "path/sobol",
+        "path/independent",
+        "naive/sobol",
+        "naive/independent",
+    ];
+    assert_eq!(labels, want);
+    let rows = read_csv(&dir.join("convergence.csv"));
+    // Rows grouped by series, in the same order.
+    let mut order: Vec<&str> = rows.iter().map(|r| r.0.as_str()).collect();
+    order.dedup();
+    assert_eq!(order, want);
+    let summary = std::fs::read_to_string(dir.join("summary.txt")).unwrap();
+    for other in &want[1..] {
+        let line = format!("{other} est. rmse / path/sobol est. rmse");
+        assert!(summary.contains(&line), "no `{line}` in\n{summary}");
+    }
+    let rgb = image::open(dir.join("convergence.png"))
+        .unwrap()
+        .into_rgb8();
+    for colour in [
+        [0u8, 114, 178],
+        [213, 94, 0],
+        [0, 158, 115],
+        [204, 121, 167],
+    ] {
+        let n = rgb.pixels().filter(|p| p.0 == colour).count();
+        assert!(n > 50, "colour {colour:?}: {n} pixels");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -1,14 +1,22 @@
 //! `ptui bench accel`: the flat scan against the BVH as the primitive count grows, and the
-//! crossover the scene build uses (`accel::BVH_CROSSOVER`). `ptui bench scenes`: paths per
-//! second on every built-in scene.
+//! crossover the scene build uses (`accel::BVH_CROSSOVER`). `ptui bench scenes`: paths and rays
+//! per second on every built-in scene, path and naive. `ptui bench error`: equal-time error
+//! ([`error`]).
+
+pub mod error;
 
 use super::{BenchArgs, BenchTarget};
 use crate::accel::{bench, BVH_CROSSOVER};
 use crate::render::Renderer;
 use crate::scene::{self, builtin};
-use crate::settings::{RenderSettings, SettingsOverrides};
+use crate::settings::{IntegratorKind, RenderSettings, SettingsOverrides};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
+
+/// Image size and worker threads of `bench scenes` and `bench error` (issue 8's set-up).
+pub const WIDTH: u32 = 320;
+pub const HEIGHT: u32 = 240;
+pub const THREADS: usize = 2;
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match args.target {
@@ -28,29 +36,48 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             }
             println!("crossover used by the scene build (accel::BVH_CROSSOVER): {BVH_CROSSOVER}");
         }
-        BenchTarget::Scenes => {
-            println!("path integrator, 320x240, {} spp, 2 threads", args.spp);
-            for name in builtin::names() {
-                let scene = Arc::new(scene::load(name)?);
-                let settings = RenderSettings::merged(&[
-                    &scene.render,
-                    &SettingsOverrides {
-                        width: Some(320),
-                        height: Some(240),
-                        spp: Some(args.spp),
-                        threads: Some(2),
-                        ..Default::default()
-                    },
-                ]);
-                let mut r = Renderer::new(scene.clone(), settings)?;
-                r.render(&AtomicBool::new(false), |_| true);
-                println!(
-                    "{name:>20}: {:6.3} M paths/s, scene build {:7.1} ms; {}",
-                    r.stats().samples_per_second() / 1e6,
-                    scene.report.build_time.as_secs_f64() * 1e3,
-                    scene.report.accel
-                );
-            }
+        BenchTarget::Scenes => scenes(args.spp)?,
+        BenchTarget::Error => error::run(args.seconds, &args.reference)?,
+    }
+    Ok(())
+}
+
+/// Paths/s and rays/s (closest-hit queries: camera, continuation and shadow rays) of every
+/// built-in scene with `path` and `naive`, `spp` samples per pixel, the scene's sampler; one
+/// markdown table row per render, printed as it finishes.
+fn scenes(spp: u32) -> anyhow::Result<()> {
+    println!("{WIDTH}x{HEIGHT}, {spp} spp, {THREADS} threads; rays = closest-hit queries");
+    println!(
+        "| scene | integrator | sampler | M paths/s | M rays/s | rays/path | build ms | accel |"
+    );
+    println!("|---|---|---|--:|--:|--:|--:|---|");
+    for name in builtin::names() {
+        let scene = Arc::new(scene::load(name)?);
+        for integrator in [IntegratorKind::Path, IntegratorKind::Naive] {
+            let settings = RenderSettings::merged(&[
+                &scene.render,
+                &SettingsOverrides {
+                    width: Some(WIDTH),
+                    height: Some(HEIGHT),
+                    spp: Some(spp),
+                    threads: Some(THREADS),
+                    integrator: Some(integrator),
+                    ..Default::default()
+                },
+            ]);
+            let mut r = Renderer::new(scene.clone(), settings)?;
+            r.render(&AtomicBool::new(false), |_| true);
+            let st = r.stats();
+            println!(
+                "| {name} | {} | {} | {:.3} | {:.3} | {:.2} | {:.1} | {} |",
+                integrator.name(),
+                r.settings.sampler.name(),
+                st.samples_per_second() / 1e6,
+                st.rays_per_second() / 1e6,
+                st.rays as f64 / st.samples.max(1) as f64,
+                scene.report.build_time.as_secs_f64() * 1e3,
+                scene.report.accel
+            );
         }
     }
     Ok(())

@@ -1,14 +1,16 @@
-//! `ptui converge`: render a scene with each integrator for the same time and settings, record
+//! `ptui converge`: render a scene with each integrator x sampler combination for the same time
+//! and settings, record
 //! the error at log-spaced checkpoints (DIR/convergence.csv), plot error against time
 //! (DIR/convergence.png), and report the fitted slopes and the equal-time error ratios
 //! (stdout and DIR/summary.txt).
 
 use super::{parse_positive, parse_size};
-use crate::convergence::{self, Metric, Schedule, Series};
+use crate::convergence::{self, Metric, Series};
 use crate::output;
 use crate::plot::{self, PlotSpec};
 use crate::reference;
-use crate::render::{build_pool, Renderer};
+use crate::render::build_pool;
+use crate::sampling::SamplerKind;
 use crate::scene::{self, builtin};
 use crate::settings::{IntegratorKind, RenderSettings, SettingsOverrides};
 use anyhow::Context;
@@ -18,11 +20,6 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-/// Checkpoints per factor of ten in time: ~20 points over a 20 s run.
-const PER_DECADE: u32 = 8;
-/// The first scheduled checkpoint; earlier passes are recorded from the second one on.
-const FIRST_CHECKPOINT: f64 = 0.01;
-
 #[derive(Args, Debug, Clone)]
 pub struct ConvergeArgs {
     /// Scene file or built-in scene name; default: cornell.
@@ -30,7 +27,7 @@ pub struct ConvergeArgs {
     /// Linear reference image (EXR) of the same size: adds measured rmse and rel_mse.
     #[arg(long, value_name = "REF.exr")]
     pub reference: Option<PathBuf>,
-    /// Render time per integrator, scene build excluded.
+    /// Render time per series (integrator x sampler), scene build excluded.
     #[arg(long, default_value_t = 10.0, value_parser = parse_positive)]
     pub seconds: f64,
     /// Image size as WIDTHxHEIGHT (default: the scene's).
@@ -39,6 +36,10 @@ pub struct ConvergeArgs {
     /// Integrators to compare, comma-separated; ratios are taken against the first.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "path,naive")]
     pub integrator: Vec<IntegratorKind>,
+    /// Samplers to compare, comma-separated (default: the scene's); every integrator runs with
+    /// every sampler, each combination a series labelled e.g. `path/sobol`.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub sampler: Vec<SamplerKind>,
     /// Worker threads (default: one per core).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -98,42 +99,32 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<ConvergeReport> {
     };
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
-    // One pool for every integrator, built before any clock starts.
+    // One pool for every series, built before any clock starts.
     let pool = build_pool(base.threads)?;
     let cancel = AtomicBool::new(false);
 
-    let mut series = Vec::new();
-    for &integrator in &args.integrator {
-        let settings = RenderSettings {
-            integrator,
-            // Time, not a sample count, ends these renders.
-            spp: u32::MAX,
-            target_error: None,
-            ..base.clone()
-        };
-        let mut r = Renderer::with_pool(scene.clone(), settings, pool.clone())?;
-        let schedule = Schedule::log_spaced(FIRST_CHECKPOINT, PER_DECADE);
-        let s = convergence::run_series(
-            &mut r,
-            reference.as_ref(),
-            args.seconds,
-            schedule,
-            &cancel,
-            |c| {
-                if !args.quiet {
-                    let rmse = c.rmse.map(|e| format!("rmse {e:.5}  ")).unwrap_or_default();
-                    println!(
-                        "{:>6} {:8.3} s {:6} spp  {rmse}est. rmse {:.5}",
-                        integrator.name(),
-                        c.seconds,
-                        c.spp,
-                        c.est_rmse
-                    );
-                }
-            },
-        );
-        series.push(s);
-    }
+    let combinations = convergence::combinations(&args.integrator, &args.sampler, base.sampler);
+    let series = convergence::run_grid(
+        &scene,
+        &base,
+        &combinations,
+        reference.as_ref(),
+        args.seconds,
+        &pool,
+        &cancel,
+        |(integrator, sampler), c| {
+            if !args.quiet {
+                let rmse = c.rmse.map(|e| format!("rmse {e:.5}  ")).unwrap_or_default();
+                println!(
+                    "{:>18} {:8.3} s {:6} spp  {rmse}est. rmse {:.5}",
+                    format!("{}/{}", integrator.name(), sampler.name()),
+                    c.seconds,
+                    c.spp,
+                    c.est_rmse
+                );
+            }
+        },
+    )?;
 
     let metric = if reference.is_some() {
         Metric::Measured
@@ -187,8 +178,8 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<ConvergeReport> {
     })
 }
 
-/// The human-readable report: settings, each integrator's final error and fitted slopes, and the
-/// equal-time error ratios against the first integrator.
+/// The human-readable report: settings, each series' final error and fitted slopes, and the
+/// equal-time error ratios against the first series.
 #[allow(clippy::too_many_arguments)]
 fn summarise(
     name: &str,
@@ -203,7 +194,7 @@ fn summarise(
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{name}: {}x{}, seed {}, {threads} threads, {} s per integrator (scene build {:.3} ms, not counted)",
+        "{name}: {}x{}, seed {}, {threads} threads, {} s per series (scene build {:.3} ms, not counted)",
         s.width,
         s.height,
         s.seed,
@@ -219,7 +210,7 @@ fn summarise(
     );
     for ser in series {
         let Some(last) = ser.points.last() else {
-            let _ = writeln!(out, "{}: no checkpoints (run too short)", ser.integrator);
+            let _ = writeln!(out, "{}: no checkpoints (run too short)", ser.label());
             continue;
         };
         let rmse = last
@@ -229,7 +220,7 @@ fn summarise(
         let _ = writeln!(
             out,
             "{}: {} spp in {:.2} s ({:.2} M samples/s), {rmse}est. rmse {:.5}",
-            ser.integrator,
+            ser.label(),
             last.spp,
             last.seconds,
             last.samples_per_second / 1e6,
@@ -262,8 +253,8 @@ fn summarise(
                         out,
                         "per sample: {} {n} * sqrt(spp) / {} {n} * sqrt(spp) = {ratio:.3} \
                          (error ratio at equal samples per pixel: independent of speed and machine load)",
-                        other.integrator,
-                        base.integrator,
+                        other.label(),
+                        base.label(),
                         n = m.name(),
                     );
                 }
@@ -272,11 +263,11 @@ fn summarise(
                         out,
                         "equal time ({t:.2} s): {} {n} / {} {n} = {ratio:.3} \
                          (at 1/sqrt(t), {} needs {:.1}x the time for {}'s error)",
-                        other.integrator,
-                        base.integrator,
-                        other.integrator,
+                        other.label(),
+                        base.label(),
+                        other.label(),
                         ratio * ratio,
-                        base.integrator,
+                        base.label(),
                         n = m.name(),
                     );
                 }

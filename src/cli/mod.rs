@@ -40,7 +40,8 @@ pub enum Command {
     /// Render scenes briefly and test them against their `[check]` expectations (default: all of
     /// scenes/extreme/).
     Check(check::CheckArgs),
-    /// Measure parts of the renderer (`accel`: flat scan vs BVH by primitive count).
+    /// Measure parts of the renderer (`accel`: flat scan vs BVH by primitive count; `scenes`:
+    /// paths/s and rays/s; `error`: equal-time error).
     Bench(BenchArgs),
 }
 
@@ -57,14 +58,29 @@ pub struct BenchArgs {
     /// `scenes`: samples per pixel of each render (320x240, 2 threads).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
+    /// `error`: render time per integrator x sampler, scene build excluded.
+    #[arg(long, default_value_t = 10.0, value_parser = parse_positive)]
+    pub seconds: f64,
+    /// `error`: linear reference image of cornell (320x240 EXR).
+    #[arg(
+        long,
+        value_name = "REF.exr",
+        default_value = "../shared/refs/cornell.exr"
+    )]
+    pub reference: PathBuf,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum BenchTarget {
     /// Closest-hit throughput of the flat scan and the BVH, 1 to 100k primitives.
     Accel,
-    /// Paths per second and scene build time of the built-in scenes, 320x240, 2 threads.
+    /// Paths and rays per second, path and naive, and scene build time of the built-in scenes,
+    /// 320x240, 2 threads.
     Scenes,
+    /// Equal-time error, 320x240, 2 threads: RMSE against the reference on cornell for path and
+    /// naive with sobol and independent samples; path vs naive estimated error on
+    /// cornell-small-light.
+    Error,
 }
 
 #[derive(Args, Debug)]

@@ -12,6 +12,7 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
     let mut beta = DVec3::ONE;
     let mut depth = 0u32;
     loop {
+        sampler.count_ray();
         let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
             l += beta * scene.background;
             break;

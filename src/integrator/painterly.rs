@@ -62,6 +62,7 @@ pub fn radiance(
     let mut painted = false;
     let paint_depth = max_depth.min(params.depth);
     loop {
+        sampler.count_ray();
         let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
             l += beta * scene.background;
             break;

@@ -25,6 +25,7 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
     let mut prev_pdf_bsdf = 0.0;
     let nee = scene.has_lights();
     loop {
+        sampler.count_ray();
         let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
             l += beta * scene.background;
             break;
@@ -98,6 +99,7 @@ pub(crate) fn direct_light(
     // Visible if the first thing along the shadow ray is the sampled light itself: no distance
     // tolerance, so light cannot leak where a light sphere grazes a wall (smallpt's ceiling).
     let shadow = shadow_ray(scene, hit, ls.wi, ls.prim);
+    sampler.count_ray();
     let visible = scene
         .intersect(&shadow, f64::INFINITY)
         .is_some_and(|h| h.prim == ls.prim);

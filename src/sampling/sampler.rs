@@ -50,6 +50,10 @@ pub struct Sampler {
     source: Source,
     /// Next dimension (pair) index for the Sobol sampler.
     dim: u32,
+    /// Closest-hit queries the integrator traced for this path (camera, continuation and shadow
+    /// rays), for `ptui bench`'s rays/s. It sits in the padding after `dim` and one add per ray
+    /// is nothing next to the query itself, so it is always counted.
+    rays: u32,
 }
 
 impl Sampler {
@@ -58,7 +62,23 @@ impl Sampler {
             SamplerKind::Independent => Source::Independent(Rng::for_sample(seed, pixel, sample)),
             SamplerKind::Sobol => Source::Sobol(PaddedSobol::new(seed, pixel, sample)),
         };
-        Sampler { source, dim: 0 }
+        Sampler {
+            source,
+            dim: 0,
+            rays: 0,
+        }
+    }
+
+    /// Record one closest-hit query; integrators call it next to every `Scene::intersect`.
+    #[inline]
+    pub fn count_ray(&mut self) {
+        self.rays = self.rays.wrapping_add(1);
+    }
+
+    /// Closest-hit queries recorded so far for this path.
+    #[inline]
+    pub fn rays(&self) -> u32 {
+        self.rays
     }
 
     #[inline]

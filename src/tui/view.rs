@@ -511,6 +511,7 @@ mod tests {
                 passes: 32,
                 complete_passes: 32,
                 samples: 32 * 64 * 48,
+                rays: 0,
                 invalid: 0,
                 elapsed: Duration::from_secs(2),
             },

@@ -1,0 +1,298 @@
+//! `ptui bench error`: the error each integrator x sampler reaches in the same render time, the
+//! table issue 8 asks for. On `cornell`, `path` and `naive` with Sobol and independent samples,
+//! measured against the reference image; on `cornell-small-light` (no reference), `path` and
+//! `naive` with the scene's sampler, compared by the film's estimated error.
+//!
+//! The renders are [`convergence::run_grid`] runs (the same code as `ptui converge`); errors are
+//! read at exactly `--seconds` by log-log interpolation between the checkpoints around it
+//! ([`convergence::error_at`]), speeds and spp at the last checkpoint (the first pass boundary at
+//! or past `--seconds`). A run too short for that (its second pass, the first with an error
+//! estimate, ends after `--seconds`) reports the errors of its last checkpoint instead.
+
+use super::{HEIGHT, THREADS, WIDTH};
+use crate::convergence::{self, Metric, Series};
+use crate::reference::{self, LinearImage};
+use crate::render::build_pool;
+use crate::sampling::SamplerKind;
+use crate::scene;
+use crate::settings::{IntegratorKind, RenderSettings, SettingsOverrides};
+use anyhow::Context;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+/// One row of the table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ErrorRow {
+    pub scene: &'static str,
+    pub series: Series,
+    pub paths_per_second: f64,
+    pub rays_per_second: f64,
+    /// Samples per pixel at the end of the run.
+    pub spp: u32,
+    /// RMSE against the reference at `seconds` (None without a reference).
+    pub rmse: Option<f64>,
+    /// The film's estimated RMSE at `seconds`.
+    pub est_rmse: f64,
+}
+
+/// Everything `bench error` measured.
+#[derive(Clone, Debug)]
+pub struct ErrorBench {
+    pub seconds: f64,
+    pub rows: Vec<ErrorRow>,
+}
+
+/// The scenes and samplers measured: (scene, use the reference, samplers; empty = the scene's).
+const PLAN: [(&str, bool, &[SamplerKind]); 2] = [
+    (
+        "cornell",
+        true,
+        &[SamplerKind::Sobol, SamplerKind::Independent],
+    ),
+    ("cornell-small-light", false, &[]),
+];
+const INTEGRATORS: [IntegratorKind; 2] = [IntegratorKind::Path, IntegratorKind::Naive];
+
+pub fn run(seconds: f64, reference_path: &Path) -> anyhow::Result<()> {
+    let reference = load_reference(reference_path)?;
+    println!(
+        "{WIDTH}x{HEIGHT}, {THREADS} threads, errors at {seconds} s of render time; rays = \
+         closest-hit queries; RMSE against {}",
+        reference_path.display()
+    );
+    println!("{}", table_header());
+    let bench = measure(seconds, &reference, |row| println!("{}", table_row(row)))?;
+    print!("{}", ratios(&bench));
+    Ok(())
+}
+
+/// Render every combination of [`PLAN`] for `seconds` each, calling `on_row` as each finishes.
+/// `reference` is cornell's, 320x240 ([`load_reference`]).
+pub fn measure(
+    seconds: f64,
+    reference: &LinearImage,
+    mut on_row: impl FnMut(&ErrorRow),
+) -> anyhow::Result<ErrorBench> {
+    let pool = build_pool(THREADS)?;
+    let cancel = AtomicBool::new(false);
+    let mut rows = Vec::new();
+    for (name, measured, samplers) in PLAN {
+        let scene = Arc::new(scene::load(name)?);
+        let base = RenderSettings::merged(&[
+            &scene.render,
+            &SettingsOverrides {
+                width: Some(WIDTH),
+                height: Some(HEIGHT),
+                threads: Some(THREADS),
+                ..Default::default()
+            },
+        ]);
+        let reference = measured.then_some(reference);
+        let combinations = convergence::combinations(&INTEGRATORS, samplers, base.sampler);
+        let series = convergence::run_grid(
+            &scene,
+            &base,
+            &combinations,
+            reference,
+            seconds,
+            &pool,
+            &cancel,
+            |_, _| {},
+        )?;
+        for s in series {
+            let row = row(name, s, seconds);
+            on_row(&row);
+            rows.push(row);
+        }
+    }
+    Ok(ErrorBench { seconds, rows })
+}
+
+/// Cornell's reference image, checked to be 320x240.
+pub fn load_reference(path: &Path) -> anyhow::Result<LinearImage> {
+    let r = reference::load(path)
+        .context("bench error needs cornell's reference image (give its path with --reference)")?;
+    r.check_size(WIDTH, HEIGHT)
+        .with_context(|| format!("{}", path.display()))?;
+    Ok(r)
+}
+
+/// The error of `series` at `t`, or at its last checkpoint when `t` is outside the measured range
+/// (a run shorter than two passes).
+fn error_at_or_last(series: &Series, metric: Metric, t: f64) -> Option<f64> {
+    convergence::error_at(series, metric, t).or_else(|| metric.of(series.points.last()?))
+}
+
+fn row(scene: &'static str, series: Series, seconds: f64) -> ErrorRow {
+    let last = series.points.last().copied();
+    ErrorRow {
+        scene,
+        paths_per_second: last.map_or(0.0, |c| c.samples_per_second),
+        rays_per_second: last.map_or(0.0, |c| c.rays_per_second),
+        spp: last.map_or(0, |c| c.spp),
+        rmse: error_at_or_last(&series, Metric::Measured, seconds),
+        est_rmse: error_at_or_last(&series, Metric::Estimated, seconds).unwrap_or(f64::NAN),
+        series,
+    }
+}
+
+pub fn table_header() -> String {
+    "| scene | integrator | sampler | M paths/s | M rays/s | spp | RMSE | est. RMSE |\n\
+     |---|---|---|--:|--:|--:|--:|--:|"
+        .to_string()
+}
+
+pub fn table_row(r: &ErrorRow) -> String {
+    format!(
+        "| {} | {} | {} | {:.3} | {:.3} | {} | {} | {:.5} |",
+        r.scene,
+        r.series.integrator,
+        r.series.sampler,
+        r.paths_per_second / 1e6,
+        r.rays_per_second / 1e6,
+        r.spp,
+        r.rmse.map_or("-".to_string(), |e| format!("{e:.5}")),
+        r.est_rmse
+    )
+}
+
+/// Equal-time ratios: on each scene, every other series' error over the first series' (path with
+/// the first sampler), in the metric the scene has (RMSE with a reference, else est. RMSE); and
+/// the same ratio at equal samples per pixel (error x sqrt(spp) at the end), which, unlike the
+/// equal-time one, does not move with the machine's load during each run.
+pub fn ratios(bench: &ErrorBench) -> String {
+    let mut out = String::new();
+    for (name, measured, _) in PLAN {
+        let rows: Vec<&ErrorRow> = bench.rows.iter().filter(|r| r.scene == name).collect();
+        let Some((base, others)) = rows.split_first() else {
+            continue;
+        };
+        let (metric, value): (Metric, fn(&ErrorRow) -> Option<f64>) = if measured {
+            (Metric::Measured, |r| r.rmse)
+        } else {
+            (Metric::Estimated, |r| Some(r.est_rmse))
+        };
+        for other in others {
+            if let (Some(b), Some(o)) = (value(base), value(other)) {
+                let _ = writeln!(
+                    out,
+                    "{name}, equal time ({} s): {} {n} / {} {n} = {:.3}",
+                    bench.seconds,
+                    other.series.label(),
+                    base.series.label(),
+                    o / b,
+                    n = metric.name()
+                );
+            }
+            if let Some(ratio) = convergence::per_sample_ratio(&base.series, &other.series, metric)
+            {
+                let _ = writeln!(
+                    out,
+                    "{name}, per sample: {} {n} / {} {n} at equal spp = {ratio:.3}",
+                    other.series.label(),
+                    base.series.label(),
+                    n = metric.name()
+                );
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::convergence::Checkpoint;
+
+    fn series(integrator: &str, pts: &[(f64, f64)]) -> Series {
+        Series {
+            integrator: integrator.into(),
+            sampler: "sobol".into(),
+            points: pts
+                .iter()
+                .enumerate()
+                .map(|(i, &(t, e))| Checkpoint {
+                    seconds: t,
+                    spp: 2 * (i as u32 + 1),
+                    samples_per_second: 1e6 * (i + 1) as f64,
+                    rays_per_second: 3e6 * (i + 1) as f64,
+                    rmse: Some(e),
+                    rel_mse: Some(e * e),
+                    est_rmse: 2.0 * e,
+                    est_rel_mse: e * e,
+                })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn rows_read_the_error_at_the_time_asked_and_speed_at_the_end() {
+        // err ~ t^-1/2 sampled at 4 and 16 s: 10 s is between them.
+        let s = series("path", &[(4.0, 0.5), (16.0, 0.25)]);
+        let r = row("cornell", s, 10.0);
+        let want = 0.5 * (4.0f64 / 10.0).sqrt();
+        assert!((r.rmse.unwrap() - want).abs() < 1e-12, "{r:?}");
+        assert!((r.est_rmse - 2.0 * want).abs() < 1e-12);
+        assert_eq!(
+            (r.spp, r.paths_per_second, r.rays_per_second),
+            (4, 2e6, 6e6)
+        );
+        assert_eq!(
+            table_row(&r),
+            format!(
+                "| cornell | path | sobol | 2.000 | 6.000 | 4 | {want:.5} | {:.5} |",
+                2.0 * want
+            )
+        );
+        // A run whose first checkpoint is already past the time: its last values.
+        let late = row("cornell", series("naive", &[(12.0, 0.3)]), 10.0);
+        assert_eq!(late.rmse, Some(0.3));
+        // Without a reference the RMSE column is a dash.
+        let mut noref = series("naive", &[(4.0, 0.5), (16.0, 0.25)]);
+        noref.points.iter_mut().for_each(|c| c.rmse = None);
+        assert!(table_row(&row("cornell-small-light", noref, 10.0)).contains("| - |"));
+    }
+
+    #[test]
+    fn ratios_compare_with_the_first_series_of_each_scene() {
+        let rows = vec![
+            row("cornell", series("path", &[(10.0, 0.02)]), 10.0),
+            row("cornell", series("naive", &[(10.0, 0.05)]), 10.0),
+            row("cornell-small-light", series("path", &[(10.0, 0.1)]), 10.0),
+            row("cornell-small-light", series("naive", &[(10.0, 0.7)]), 10.0),
+        ];
+        let text = ratios(&ErrorBench {
+            seconds: 10.0,
+            rows,
+        });
+        assert!(
+            text.contains("cornell, equal time (10 s): naive/sobol rmse / path/sobol rmse = 2.500"),
+            "{text}"
+        );
+        assert!(
+            text.contains(
+                "cornell-small-light, equal time (10 s): naive/sobol est. rmse / path/sobol est. rmse = 7.000"
+            ),
+            "{text}"
+        );
+        // Same spp in both (one checkpoint each): the per-sample ratio is the plain one.
+        assert!(
+            text.contains(
+                "cornell, per sample: naive/sobol rmse / path/sobol rmse at equal spp = 2.500"
+            ),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn a_missing_reference_is_an_error_naming_it() {
+        let err = load_reference(Path::new("/nonexistent/cornell.exr")).expect_err("no reference");
+        let msg = format!("{err:#}");
+        assert!(
+            msg.contains("/nonexistent/cornell.exr") && msg.contains("--reference"),
+            "{msg}"
+        );
+    }
+}
