@@ -99,17 +99,6 @@ pub struct SphereDesc {
     pub ior: Option<Spanned<Ior>>,
 }
 
-impl SphereDesc {
-    pub fn material(&self) -> MaterialDesc {
-        MaterialDesc {
-            material: self.material,
-            color: self.color,
-            emission: self.emission,
-            ior: self.ior.clone(),
-        }
-    }
-}
-
 /// Largest magnitude accepted for a coordinate, a length or a radiance. Products of two such
 /// values (squared distances, area times emission) stay near 1e60, far from f64 overflow
 /// (1.8e308) even after a path's throughput grows; larger numbers mean nothing in a scene and
@@ -122,6 +111,7 @@ pub const MIN_MAGNITUDE: f64 = 1e-30;
 /// Index of refraction range: every transparent material (diamond 2.42, germanium 4.0) and its
 /// inverse fit, and the radiance scaling eta^2 of one refraction stays at most 100.
 pub const IOR_RANGE: (f64, f64) = (0.1, 10.0);
+
 /// `[[triangle]]`: one triangle; the front side sees the vertices counter-clockwise.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -191,7 +181,7 @@ macro_rules! material_of {
         }
     )*};
 }
-material_of!(TriangleDesc, QuadDesc, MeshDesc);
+material_of!(SphereDesc, TriangleDesc, QuadDesc, MeshDesc);
 
 /// A finite 3-vector.
 #[derive(Clone, Copy, Debug, PartialEq)]
