@@ -32,11 +32,10 @@ pub mod stream;
 use self::bounce::painterly_direction;
 use self::params::PainterlyParams;
 use self::stream::PaintStream;
-use super::russian_roulette;
+use super::{path, russian_roulette};
 use crate::geometry::spawn_origin;
 use crate::material::{fresnel, BsdfSample, Material, MaterialKind};
 use crate::math::{DVec3, Ray};
-use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
@@ -74,9 +73,8 @@ pub fn radiance(
             let weight = match prim.light {
                 // Direct light of a painterly vertex was counted by its light sample alone.
                 Some(_) if prev_painterly && nee => 0.0,
-                Some(light) if !specular && nee => {
-                    let pdf_light = scene.lights.pdf(light as usize, prev_p, ray.d);
-                    power_heuristic(prev_pdf_bsdf, pdf_light)
+                Some(_) if !specular && nee => {
+                    path::emission_mis_weight(scene, prim, prev_p, prev_pdf_bsdf, ray.d)
                 }
                 _ => 1.0,
             };
@@ -89,7 +87,7 @@ pub fn radiance(
         let paint_here = paints(material) && stream.paints(depth);
 
         if nee && !material.is_delta() {
-            l += beta * super::path::direct_light(scene, &hit, wo, material, sampler, !paint_here);
+            l += beta * path::direct_light(scene, &hit, wo, material, sampler, !paint_here);
         } else if nee {
             // Keep the dimension count per bounce fixed, exactly as `path` does.
             sampler.get_1d();

@@ -13,7 +13,7 @@ use crate::material::Material;
 use crate::math::{DVec3, Ray};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
-use crate::scene::Scene;
+use crate::scene::{Primitive, Scene};
 
 pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u32) -> DVec3 {
     let mut l = DVec3::ZERO;
@@ -34,12 +34,10 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         let prim = &scene.prims[hit.prim as usize];
 
         if material.is_emissive() {
-            let weight = match prim.light {
-                Some(light) if !specular && nee => {
-                    let pdf_light = scene.lights.pdf(light as usize, prev_p, ray.d);
-                    power_heuristic(prev_pdf_bsdf, pdf_light)
-                }
-                _ => 1.0,
+            let weight = if specular || !nee {
+                1.0
+            } else {
+                emission_mis_weight(scene, prim, prev_p, prev_pdf_bsdf, ray.d)
             };
             l += beta * material.emission * weight;
         }
@@ -72,6 +70,26 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
     }
     l
+}
+
+/// MIS weight of emission found by BSDF sampling from `prev_p` (pdf `prev_pdf_bsdf`) against
+/// light sampling, which could have chosen the same direction. Only for a non-delta previous
+/// bounce in a scene with light sampling.
+#[inline]
+pub(crate) fn emission_mis_weight(
+    scene: &Scene,
+    prim: &Primitive,
+    prev_p: DVec3,
+    prev_pdf_bsdf: f64,
+    wi: DVec3,
+) -> f64 {
+    match prim.light {
+        Some(light) => {
+            let pdf_light = scene.lights.pdf(light as usize, prev_p, wi);
+            power_heuristic(prev_pdf_bsdf, pdf_light)
+        }
+        None => 1.0,
+    }
 }
 
 /// Next-event estimation at a non-delta vertex: one light chosen by power, a direction towards
