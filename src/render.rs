@@ -7,6 +7,7 @@
 
 use crate::film::{ErrorEstimate, Film};
 use crate::integrator;
+use crate::integrator::caustics::{CausticTracer, PassSplats};
 use crate::math::DVec3;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -39,8 +40,13 @@ pub struct RenderStats {
     pub complete_passes: u32,
     /// Camera samples computed (valid or not).
     pub samples: u64,
-    /// Closest-hit queries traced for those samples (camera, continuation and shadow rays).
+    /// Closest-hit queries traced for those samples (camera, continuation and shadow rays),
+    /// light-traced caustic paths included.
     pub rays: u64,
+    /// Of `rays`, those traced by the caustic light paths.
+    pub light_rays: u64,
+    /// Caustic light paths traced.
+    pub light_paths: u64,
     /// NaN or infinite samples dropped before reaching the film.
     pub invalid: u64,
     /// Wall time spent in passes.
@@ -77,6 +83,10 @@ pub struct Renderer {
     /// set (it costs one sweep over the film reading 9 means per pixel, against whole paths per
     /// pixel in a pass).
     error: Option<ErrorEstimate>,
+    /// The caustic light tracer, when the scene and settings allow one.
+    caustics: Option<CausticTracer>,
+    /// What was chosen for caustics, and why.
+    caustics_note: String,
 }
 
 /// A rayon pool with `threads` workers (0 = one per core).
@@ -102,7 +112,16 @@ impl Renderer {
         pool: Arc<rayon::ThreadPool>,
     ) -> Result<Self, RenderError> {
         settings.validate().map_err(RenderError::Settings)?;
+        let (caustics, caustics_note) = match CausticTracer::new(&scene, &settings) {
+            Ok(t) => {
+                let note = t.describe();
+                (Some(t), note)
+            }
+            Err(why) => (None, why),
+        };
         Ok(Renderer {
+            caustics,
+            caustics_note,
             film: Film::new(settings.width, settings.height),
             scene,
             settings,
@@ -118,6 +137,11 @@ impl Renderer {
 
     pub fn stats(&self) -> RenderStats {
         self.stats
+    }
+
+    /// How caustics seen directly are estimated, and why (for summaries).
+    pub fn caustics_note(&self) -> &str {
+        &self.caustics_note
     }
 
     pub fn threads(&self) -> usize {
@@ -163,17 +187,38 @@ impl Renderer {
         let invalid = AtomicU64::new(0);
         let samples = AtomicU64::new(0);
         let rays = AtomicU64::new(0);
+        let splats = match self.caustics.as_ref() {
+            Some(t) if !cancel.load(Ordering::Relaxed) => self
+                .pool
+                .install(|| t.trace_pass(scene, settings.seed, pass)),
+            _ => PassSplats::default(),
+        };
+        self.stats.rays += splats.rays;
+        self.stats.light_rays += splats.rays;
+        self.stats.light_paths += splats.paths;
+        let splats = &splats;
+        let caustics = self.caustics.as_ref();
         let film = &mut self.film;
         self.pool.install(|| {
             film.par_bands(band_rows).for_each(|mut band| {
                 let (mut bad, mut done, mut traced) = (0u64, 0u64, 0u64);
+                let first = band.first_row * settings.width;
+                let mut band_splats = splats
+                    .range(first, first + band.rows() * settings.width)
+                    .iter()
+                    .peekable();
                 for row in 0..band.rows() {
                     if cancel.load(Ordering::Relaxed) {
                         break;
                     }
                     let y = band.first_row + row;
                     for x in 0..settings.width {
-                        let (v, r) = sample_pixel_counted(scene, settings, x, y, pass);
+                        let (mut v, r) =
+                            sample_pixel_counted(scene, settings, x, y, pass, caustics);
+                        let pixel = y * settings.width + x;
+                        while let Some(s) = band_splats.next_if(|s| s.0 == pixel) {
+                            v += DVec3::new(s.1[0] as f64, s.1[1] as f64, s.1[2] as f64);
+                        }
                         done += 1;
                         traced += r as u64;
                         if v.is_finite() {
@@ -222,10 +267,11 @@ impl Renderer {
 /// footprint (box filter) and its radiance.
 #[inline]
 pub fn sample_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, pass: u32) -> DVec3 {
-    sample_pixel_counted(scene, settings, x, y, pass).0
+    sample_pixel_counted(scene, settings, x, y, pass, None).0
 }
 
-/// [`sample_pixel`] and the number of closest-hit queries its path traced.
+/// [`sample_pixel`] and the number of closest-hit queries its path traced. With `caustics`,
+/// the camera path leaves out the caustics the tracer estimates.
 #[inline]
 pub fn sample_pixel_counted(
     scene: &Scene,
@@ -233,6 +279,7 @@ pub fn sample_pixel_counted(
     x: u32,
     y: u32,
     pass: u32,
+    caustics: Option<&CausticTracer>,
 ) -> (DVec3, u32) {
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, pass as u64);
@@ -249,6 +296,7 @@ pub fn sample_pixel_counted(
         ray,
         &mut sampler,
         integrator::PixelSample { x, y, pass },
+        caustics,
     );
     (l, sampler.rays())
 }

@@ -44,6 +44,28 @@ impl IntegratorKind {
     }
 }
 
+/// How the `path` integrator estimates caustics seen directly (light reaching a diffuse surface
+/// the camera sees through one or more mirror or glass bounces).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Caustics {
+    /// Trace them from the lights and connect to the camera, where the scene allows (its mirror
+    /// and glass objects are all spheres, no depth limit): still unbiased, far less noisy.
+    #[default]
+    Light,
+    /// Leave them to the camera paths' BSDF sampling, like every other path.
+    Path,
+}
+
+impl Caustics {
+    pub fn name(self) -> &'static str {
+        match self {
+            Caustics::Light => "light",
+            Caustics::Path => "path",
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Tonemap {
@@ -76,6 +98,8 @@ pub struct RenderSettings {
     pub seed: u64,
     pub integrator: IntegratorKind,
     pub sampler: SamplerKind,
+    /// Caustics by light tracing or by the camera paths (`path` integrator only).
+    pub caustics: Caustics,
     /// Longest path in bounces; `None` leaves it to Russian roulette.
     pub max_depth: Option<u32>,
     pub exposure: f64,
@@ -98,6 +122,7 @@ impl Default for RenderSettings {
             seed: 0,
             integrator: IntegratorKind::Path,
             sampler: SamplerKind::Sobol,
+            caustics: Caustics::Light,
             max_depth: None,
             exposure: 1.0,
             tonemap: Tonemap::Clamp,
@@ -130,6 +155,7 @@ pub struct SettingsOverrides {
     pub seed: Option<u64>,
     pub integrator: Option<IntegratorKind>,
     pub sampler: Option<SamplerKind>,
+    pub caustics: Option<Caustics>,
     pub max_depth: Option<u32>,
     #[serde(
         default,
@@ -155,7 +181,7 @@ impl RenderSettings {
         macro_rules! take {
             ($($f:ident),*) => { $( if let Some(v) = o.$f { self.$f = v; } )* };
         }
-        take!(width, height, spp, seed, integrator, sampler, exposure, tonemap, threads);
+        take!(width, height, spp, seed, integrator, sampler, caustics, exposure, tonemap, threads);
         if let Some(d) = o.max_depth {
             self.max_depth = Some(d);
         }

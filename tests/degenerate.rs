@@ -62,11 +62,7 @@ fn light_sampling_from_every_axis() {
     let mut rng = Rng::new(1);
     for &(c, r) in SPHERES {
         let sphere = Sphere::new(DVec3::from_array(c), r);
-        let light = SphereLight {
-            prim: 0,
-            sphere,
-            emission: DVec3::ONE,
-        };
+        let light = SphereLight::new(0, sphere, DVec3::ONE);
         for axis in [
             DVec3::X,
             -DVec3::X,
@@ -79,7 +75,7 @@ fn light_sampling_from_every_axis() {
             let p = sphere.center + axis * (3.0 * r);
             for _ in 0..1000 {
                 let ls = light
-                    .sample(p, (rng.next_f64(), rng.next_f64()))
+                    .sample(p, p, (rng.next_f64(), rng.next_f64()))
                     .expect("a light in view can be sampled");
                 assert!(ls.wi.is_finite() && ls.pdf.is_finite() && ls.pdf > 0.0);
                 assert!((ls.wi.length() - 1.0).abs() < 1e-12);

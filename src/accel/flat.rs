@@ -53,6 +53,14 @@ impl FlatScan {
 
     #[inline]
     pub fn intersect(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<Hit> {
+        self.closest(prims, ray, t_max)
+            .map(|(t, i)| prims[i as usize].shape.hit(ray, t, i))
+    }
+
+    /// Distance and index of the closest hit, without the hit record (shadow rays need only
+    /// which primitive it is).
+    #[inline]
+    pub fn closest(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<(f64, u32)> {
         let (mut best, mut best_index) = self
             .spheres
             .intersect(ray, t_max)
@@ -67,7 +75,6 @@ impl FlatScan {
                 }
             }
         }
-        (best_index != u32::MAX)
-            .then(|| prims[best_index as usize].shape.hit(ray, best, best_index))
+        (best_index != u32::MAX).then_some((best, best_index))
     }
 }

@@ -102,6 +102,16 @@ impl Accel {
         }
     }
 
+    /// Index of the closest primitive hit in (0, t_max): the same answer as `intersect`,
+    /// without building the hit record where the accelerator can avoid it.
+    #[inline]
+    pub fn closest_prim(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<u32> {
+        match self {
+            Accel::Flat(f) => f.closest(prims, ray, t_max).map(|(_, i)| i),
+            Accel::Bvh(b) => b.intersect(prims, ray, t_max).map(|h| h.prim),
+        }
+    }
+
     /// Whether anything is hit in (0, t_max).
     #[inline]
     pub fn any_hit(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> bool {

@@ -121,6 +121,9 @@ pub struct SettingsArgs {
     /// Sample sequence: Owen-scrambled Sobol or independent random numbers.
     #[arg(long, value_enum)]
     pub sampler: Option<SamplerKind>,
+    /// Caustics seen directly (`path` only): traced from the lights, or left to camera paths.
+    #[arg(long, value_enum)]
+    pub caustics: Option<crate::settings::Caustics>,
     /// Longest path in bounces (default: unlimited, Russian roulette ends paths).
     #[arg(long)]
     pub max_depth: Option<u32>,
@@ -162,6 +165,7 @@ impl SettingsArgs {
             seed: self.seed,
             integrator: self.integrator,
             sampler: self.sampler,
+            caustics: self.caustics,
             max_depth: self.max_depth,
             threads: self.threads.map(|t| t as usize),
             exposure: self.exposure,

@@ -72,7 +72,7 @@ pub fn summary(r: &Renderer) -> String {
     format!(
         "{name}: {w}x{h}, {spp} spp, {integ} integrator, seed {seed}, {threads} threads\n\
          time {time:.2} s (scene build {build:.1} ms), {rate:.2} M samples/s, invalid samples {invalid}\n\
-         {report}\n\
+         {report}; caustics: {caustics}{light_paths}\n\
          estimated error: rmse {rmse:.5}, relative {rel:.5}\n\
          {stop}\n",
         name = r.scene.name,
@@ -90,6 +90,16 @@ pub fn summary(r: &Renderer) -> String {
         rate = st.samples_per_second() / 1e6,
         invalid = st.invalid,
         report = r.scene.report,
+        caustics = r.caustics_note(),
+        light_paths = if st.light_paths > 0 {
+            format!(
+                ", {:.1} M light paths, {:.1}% of all rays",
+                st.light_paths as f64 / 1e6,
+                100.0 * st.light_rays as f64 / st.rays.max(1) as f64
+            )
+        } else {
+            String::new()
+        },
         rmse = err.rmse,
         rel = err.relative(),
         stop = stop_reason(r),

@@ -1,6 +1,7 @@
 //! Estimators of the radiance arriving along a camera ray. Each is a plain function over the
 //! immutable scene and a per-sample [`Sampler`]; the closed set is dispatched by one `match`.
 
+pub mod caustics;
 pub mod naive;
 pub mod painterly;
 pub mod path;
@@ -58,10 +59,11 @@ pub fn radiance(
     ray: Ray,
     sampler: &mut Sampler,
     px: PixelSample,
+    caustics: Option<&caustics::CausticTracer>,
 ) -> DVec3 {
     let max_depth = depth_limit(settings);
     match settings.integrator {
-        IntegratorKind::Path => path::radiance(scene, ray, sampler, max_depth),
+        IntegratorKind::Path => path::radiance(scene, ray, sampler, max_depth, caustics),
         IntegratorKind::Naive => naive::radiance(scene, ray, sampler, max_depth),
         IntegratorKind::Painterly => {
             let p = &settings.painterly;

@@ -53,6 +53,7 @@ pub fn radiance(
     // Whether the previous bounce was a delta lobe (the camera counts as one).
     let mut specular = true;
     let mut prev_p = ray.o;
+    let mut prev_side = ray.o;
     let mut prev_pdf_bsdf = 0.0;
     let nee = scene.has_lights();
     // Whether the previous bounce was a painterly diffuse one (its emission hit is not counted).
@@ -73,9 +74,15 @@ pub fn radiance(
             let weight = match prim.light {
                 // Direct light of a painterly vertex was counted by its light sample alone.
                 Some(_) if prev_painterly && nee => 0.0,
-                Some(_) if !specular && nee => {
-                    path::emission_mis_weight(scene, prim, prev_p, prev_pdf_bsdf, ray.d)
-                }
+                Some(_) if !specular && nee => path::emission_mis_weight(
+                    scene,
+                    prim,
+                    prev_p,
+                    prev_side,
+                    prev_pdf_bsdf,
+                    ray.d,
+                    hit.p,
+                ),
                 _ => 1.0,
             };
             l += beta * material.emission * weight;
@@ -110,6 +117,7 @@ pub fn radiance(
         specular = bs.delta;
         prev_pdf_bsdf = bs.pdf;
         prev_p = hit.p;
+        prev_side = spawn_origin(hit.p, hit.n, hit.err, wo);
         prev_painterly = paint_here && !bs.delta;
         painted |= paint_here;
         depth += 1;

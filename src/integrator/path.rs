@@ -7,23 +7,38 @@
 //! w_bsdf. After a delta bounce (mirror, glass) light sampling could not have found the path, so
 //! the emission counts in full.
 
+use super::caustics::CausticTracer;
 use super::russian_roulette;
 use crate::geometry::{spawn_origin, Hit};
+use crate::light::LightSample;
 use crate::material::Material;
 use crate::math::{DVec3, Ray};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
 use crate::scene::{Primitive, Scene};
 
-pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u32) -> DVec3 {
+/// With `caustics`, the caustics it light-traces are left to it: emission reached from a
+/// non-delta first hit through one or more specular bounces, on the part of a light it covers.
+pub fn radiance(
+    scene: &Scene,
+    mut ray: Ray,
+    sampler: &mut Sampler,
+    max_depth: u32,
+    caustics: Option<&CausticTracer>,
+) -> DVec3 {
     let mut l = DVec3::ZERO;
     let mut beta = DVec3::ONE;
     let mut depth = 0u32;
     // Whether the previous bounce was a delta lobe (the camera counts as one).
     let mut specular = true;
     let mut prev_p = ray.o;
+    let mut prev_side = ray.o;
     let mut prev_pdf_bsdf = 0.0;
     let nee = scene.has_lights();
+    // Whether the last non-delta vertex was the first hit (a caustic end the tracer covers),
+    // and the delta bounces since.
+    let mut caustic_end = false;
+    let mut delta_run = 0u32;
     loop {
         sampler.count_ray();
         let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
@@ -33,11 +48,23 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         let material = scene.material(&hit);
         let prim = &scene.prims[hit.prim as usize];
 
-        if material.is_emissive() {
+        let traced = caustic_end
+            && delta_run > 0
+            && caustics.is_some_and(|c| {
+                prim.light
+                    .is_some_and(|light| c.covers(light, hit.p, hit.n, ray.d))
+            });
+        if material.is_delta() {
+            delta_run += 1;
+        } else {
+            caustic_end = depth == 0;
+            delta_run = 0;
+        }
+        if material.is_emissive() && !traced {
             let weight = if specular || !nee {
                 1.0
             } else {
-                emission_mis_weight(scene, prim, prev_p, prev_pdf_bsdf, ray.d)
+                emission_mis_weight(scene, prim, prev_p, prev_side, prev_pdf_bsdf, ray.d, hit.p)
             };
             l += beta * material.emission * weight;
         }
@@ -63,6 +90,7 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
         specular = bs.delta;
         prev_pdf_bsdf = bs.pdf;
         prev_p = hit.p;
+        prev_side = spawn_origin(hit.p, hit.n, hit.err, wo);
         depth += 1;
         if !russian_roulette(&mut beta, depth, sampler.get_1d()) {
             break;
@@ -72,20 +100,23 @@ pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u
     l
 }
 
-/// MIS weight of emission found by BSDF sampling from `prev_p` (pdf `prev_pdf_bsdf`) against
-/// light sampling, which could have chosen the same direction. Only for a non-delta previous
+/// MIS weight of emission found by BSDF sampling from `prev_p` (pdf `prev_pdf_bsdf`; `prev_side`
+/// just off its surface on the side the path came from) against
+/// light sampling, which could have chosen the same direction (hitting the light at `x`). Only for a non-delta previous
 /// bounce in a scene with light sampling.
 #[inline]
 pub(crate) fn emission_mis_weight(
     scene: &Scene,
     prim: &Primitive,
     prev_p: DVec3,
+    prev_side: DVec3,
     prev_pdf_bsdf: f64,
     wi: DVec3,
+    x: DVec3,
 ) -> f64 {
     match prim.light {
         Some(light) => {
-            let pdf_light = scene.lights.pdf(light as usize, prev_p, wi);
+            let pdf_light = scene.lights.pdf(light as usize, prev_p, prev_side, wi, x);
             power_heuristic(prev_pdf_bsdf, pdf_light)
         }
         None => 1.0,
@@ -107,7 +138,8 @@ pub(crate) fn direct_light(
 ) -> DVec3 {
     let u_light = sampler.get_1d();
     let u = sampler.get_2d();
-    let Some(ls) = scene.lights.sample(hit.p, u_light, u) else {
+    let side = spawn_origin(hit.p, hit.n, hit.err, wo);
+    let Some(ls) = scene.lights.sample(hit.p, side, u_light, u) else {
         return DVec3::ZERO;
     };
     let e = material.eval(wo, ls.wi, hit.n);
@@ -116,11 +148,9 @@ pub(crate) fn direct_light(
     }
     // Visible if the first thing along the shadow ray is the sampled light itself: no distance
     // tolerance, so light cannot leak where a light sphere grazes a wall (smallpt's ceiling).
-    let shadow = shadow_ray(scene, hit, ls.wi, ls.prim);
+    let shadow = shadow_ray(scene, hit, &ls);
     sampler.count_ray();
-    let visible = scene
-        .intersect(&shadow, f64::INFINITY)
-        .is_some_and(|h| h.prim == ls.prim);
+    let visible = scene.first_prim(&shadow) == Some(ls.prim);
     if !visible {
         return DVec3::ZERO;
     }
@@ -139,11 +169,17 @@ pub(crate) fn direct_light(
 /// the light was lost. Falls back to `wi` when the aim cannot be recomputed (a light sampled from
 /// its own surface, or a direction that rounds past the light's rim).
 #[inline]
-fn shadow_ray(scene: &Scene, hit: &Hit, wi: DVec3, light_prim: u32) -> Ray {
+fn shadow_ray(scene: &Scene, hit: &Hit, ls: &LightSample) -> Ray {
+    let wi = ls.wi;
     let o = spawn_origin(hit.p, hit.n, hit.err, wi);
-    let shape = &scene.prims[light_prim as usize].shape;
-    if let Some(t) = shape.intersect(&Ray::new(hit.p, wi), f64::INFINITY) {
-        let d = (hit.p + wi * t - o).normalize_or_zero();
+    let target = ls.point.or_else(|| {
+        let shape = &scene.prims[ls.prim as usize].shape;
+        shape
+            .intersect(&Ray::new(hit.p, wi), f64::INFINITY)
+            .map(|t| hit.p + wi * t)
+    });
+    if let Some(x) = target {
+        let d = (x - o).normalize_or_zero();
         // Same side of the surface as wi, so the origin's offset still points the right way.
         if d.dot(hit.n) * wi.dot(hit.n) > 0.0 {
             return Ray::new(o, d);

@@ -17,8 +17,14 @@ pub struct LightSample {
     pub le: DVec3,
     /// The primitive the shadow ray must hit first for the sample to count.
     pub prim: u32,
+    /// The point on the light `wi` reaches, when the sampler found it anyway (saves the shadow
+    /// ray's aim a ray-light test).
+    pub point: Option<DVec3>,
 }
 
+// A sphere light carries its cuts inline (a few hundred bytes): scenes hold a handful of
+// lights, and keeping them `Copy` and free of indirection matters more than their size.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
 pub enum Light {
     Sphere(sphere::SphereLight),
@@ -92,9 +98,17 @@ impl Lights {
         self.pmf[light]
     }
 
-    /// Choose a light with `u_select` and a direction towards it from `p` with `u`.
+    /// Choose a light with `u_select` and a direction towards it from `p` with `u`. `side` is a
+    /// point just off the surface at `p` on the side the path arrived from: it tells which part
+    /// of a light cut by a surface through `p` can be seen.
     #[inline]
-    pub fn sample(&self, p: DVec3, u_select: f64, u: (f64, f64)) -> Option<LightSample> {
+    pub fn sample(
+        &self,
+        p: DVec3,
+        side: DVec3,
+        u_select: f64,
+        u: (f64, f64),
+    ) -> Option<LightSample> {
         let index = match self.lights.len() {
             0 => return None,
             1 => 0,
@@ -105,7 +119,7 @@ impl Lights {
             return None;
         }
         let mut s = match &self.lights[index] {
-            Light::Sphere(l) => l.sample(p, u)?,
+            Light::Sphere(l) => l.sample(p, side, u)?,
             Light::Triangle(l) => l.sample(p, u)?,
         };
         s.pdf *= pmf;
@@ -113,11 +127,11 @@ impl Lights {
     }
 
     /// Solid-angle pdf (with selection) that [`Lights::sample`] picks direction `wi` from `p`
-    /// towards light `light`, given that `wi` hits it.
+    /// towards light `light`, given that `wi` hits it first at `x`; `side` as for `sample`.
     #[inline]
-    pub fn pdf(&self, light: usize, p: DVec3, wi: DVec3) -> f64 {
+    pub fn pdf(&self, light: usize, p: DVec3, side: DVec3, wi: DVec3, x: DVec3) -> f64 {
         let pdf = match &self.lights[light] {
-            Light::Sphere(l) => l.pdf(p),
+            Light::Sphere(l) => l.pdf(p, side, x),
             Light::Triangle(l) => l.pdf(p, wi),
         };
         pdf * self.pmf[light]

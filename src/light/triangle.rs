@@ -40,6 +40,7 @@ impl TriangleLight {
             pdf,
             le: self.emission,
             prim: self.prim,
+            point: Some(y),
         })
     }
 

@@ -137,11 +137,9 @@ impl Builder<'_> {
             let prim = self.prims.len() as u32;
             let light = if m.is_emissive() {
                 self.lights.push(match shape {
-                    Shape::Sphere(sphere) => Light::Sphere(SphereLight {
-                        prim,
-                        sphere,
-                        emission: m.emission,
-                    }),
+                    Shape::Sphere(sphere) => {
+                        Light::Sphere(SphereLight::new(prim, sphere, m.emission))
+                    }
                     Shape::Triangle(triangle) => Light::Triangle(TriangleLight {
                         prim,
                         triangle,
@@ -244,12 +242,23 @@ fn build(
     let nx = ((32 * size.width) / size.height.max(1)).clamp(1, 128);
     let probe = camera_probe(&camera, nx, 32);
     let (accel, why) = Accel::build(choice, &prims, &probe);
-    let lights = Lights::new(lights);
-    let light_sampling = match lights.len() {
+    let lights = Lights::new(clip_sphere_lights(lights, &prims));
+    let mut light_sampling = match lights.len() {
         0 => "off (no emitters)".to_string(),
         1 => "1 emitter".to_string(),
         n => format!("{n} emitters, chosen by power"),
     };
+    let clipped = lights
+        .lights
+        .iter()
+        .filter(|l| matches!(l, Light::Sphere(s) if s.clips().next().is_some()))
+        .count();
+    if clipped > 0 {
+        light_sampling += &format!(
+            "; {clipped} sphere light(s) cut by other spheres: only the cap on the shading \
+             point's side is sampled"
+        );
+    }
     let report = BuildReport {
         accel: format!("{} ({why})", accel.describe(prims.len())),
         light_sampling,
@@ -268,6 +277,26 @@ fn build(
         render: desc.render.clone(),
         report,
     })
+}
+
+/// Sphere lights cut by other spheres' surfaces learn the cuts, so light sampling can leave out
+/// the parts hidden behind them (see `light::sphere`).
+fn clip_sphere_lights(lights: Vec<Light>, prims: &[Primitive]) -> Vec<Light> {
+    let spheres: Vec<&Sphere> = prims
+        .iter()
+        .filter_map(|p| match &p.shape {
+            Shape::Sphere(s) => Some(s),
+            #[allow(unreachable_patterns)]
+            _ => None,
+        })
+        .collect();
+    lights
+        .into_iter()
+        .map(|l| match l {
+            Light::Sphere(s) => Light::Sphere(s.with_clips(spheres.iter().copied())),
+            other => other,
+        })
+        .collect()
 }
 
 /// The triangles of one `[[mesh]]`, transformed.

@@ -98,6 +98,12 @@ impl Scene {
         self.accel.intersect(&self.prims, ray, t_max)
     }
 
+    /// Index of the first primitive along `ray` (shadow rays: is it the sampled light?).
+    #[inline]
+    pub fn first_prim(&self, ray: &Ray) -> Option<u32> {
+        self.accel.closest_prim(&self.prims, ray, f64::INFINITY)
+    }
+
     #[inline]
     pub fn material(&self, hit: &Hit) -> &Material {
         &self.materials[self.prims[hit.prim as usize].material as usize]

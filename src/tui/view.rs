@@ -512,6 +512,8 @@ mod tests {
                 complete_passes: 32,
                 samples: 32 * 64 * 48,
                 rays: 0,
+                light_rays: 0,
+                light_paths: 0,
                 invalid: 0,
                 elapsed: Duration::from_secs(2),
             },

@@ -1,0 +1,58 @@
+//! Where does an image's error against a reference sit? Prints the RMSE, the share of the squared
+//! error carried by the worst pixels, and writes a heat map of the per-pixel squared error.
+//!
+//! ```sh
+//! cargo run --release --example error_breakdown -- render.exr ../shared/refs/cornell.exr heat.png
+//! ```
+
+use ptui::reference;
+use std::path::Path;
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    anyhow::ensure!(
+        args.len() >= 3,
+        "usage: error_breakdown IMAGE.exr REF.exr [HEAT.png]"
+    );
+    let img = reference::load(Path::new(&args[1]))?;
+    let rf = reference::load(Path::new(&args[2]))?;
+    anyhow::ensure!(
+        img.width == rf.width && img.height == rf.height,
+        "sizes differ"
+    );
+    let n = (img.width * img.height) as usize;
+    let mut se: Vec<(f64, usize)> = (0..n)
+        .map(|i| {
+            let s: f64 = (0..3)
+                .map(|c| (img.data[3 * i + c] as f64 - rf.data[3 * i + c] as f64).powi(2))
+                .sum();
+            (s / 3.0, i)
+        })
+        .collect();
+    let total: f64 = se.iter().map(|x| x.0).sum();
+    println!("RMSE {:.5}", (total / n as f64).sqrt());
+    se.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for frac in [0.001, 0.01, 0.05, 0.1, 0.25, 0.5] {
+        let k = ((n as f64) * frac) as usize;
+        let part: f64 = se[..k].iter().map(|x| x.0).sum();
+        let rest = ((total - part) / n as f64).sqrt();
+        println!(
+            "worst {:>5.1}% of pixels: {:>5.1}% of squared error; RMSE without them {:.5}",
+            frac * 100.0,
+            100.0 * part / total,
+            rest
+        );
+    }
+    if let Some(out) = args.get(3) {
+        let p99 = se[n / 100].0.max(1e-12);
+        let mut buf = vec![0u8; n * 3];
+        for &(s, i) in &se {
+            let v = ((s / p99).sqrt().min(1.0) * 255.0) as u8;
+            buf[3 * i] = v;
+            buf[3 * i + 1] = v;
+            buf[3 * i + 2] = v;
+        }
+        image::save_buffer(out, &buf, img.width, img.height, image::ColorType::Rgb8)?;
+    }
+    Ok(())
+}
