@@ -43,6 +43,9 @@ pub struct Clip {
     pub h_in: f64,
     /// The same for the cap outside it: 2 - h_in, computed without cancellation.
     pub h_out: f64,
+    /// The two caps, where small enough to be worth sampling alone.
+    cap_in: Option<Cap>,
+    cap_out: Option<Cap>,
 }
 
 impl Clip {
@@ -58,36 +61,53 @@ impl Clip {
         // 1 + z0 as products of differences of lengths, exact for caps of any size.
         let h_in = (ro - d + r) * (ro + d - r) / (2.0 * r * d);
         let h_out = (r + d - ro) * (r + d + ro) / (2.0 * r * d);
-        (h_in > 0.0 && h_out > 0.0 && h_in.is_finite() && h_out.is_finite()).then_some(Clip {
+        if !(h_in > 0.0 && h_out > 0.0 && h_in.is_finite() && h_out.is_finite()) {
+            return None;
+        }
+        let axis = to / d;
+        Some(Clip {
             center: other.center,
             radius2: ro * ro,
-            axis: to / d,
+            axis,
             h_in,
             h_out,
+            cap_in: Cap::new(light, axis, h_in),
+            cap_out: Cap::new(light, -axis, h_out),
         })
     }
 
-    /// The cap of the light on the same side of the cutting surface as `p`.
-    fn cap_for(&self, p: DVec3) -> Cap {
+    /// The cap of the light on the same side of the cutting surface as `p`, if small enough.
+    #[inline]
+    fn cap_for(&self, p: DVec3) -> Option<Cap> {
         if (p - self.center).length_squared() < self.radius2 {
-            Cap {
-                axis: self.axis,
-                h: self.h_in,
-            }
+            self.cap_in
         } else {
-            Cap {
-                axis: -self.axis,
-                h: self.h_out,
-            }
+            self.cap_out
         }
     }
 }
 
-/// The light's points x with (x - c) / r . axis >= 1 - h.
-#[derive(Clone, Copy, Debug)]
+/// The light's points x with (x - c) / r . axis >= 1 - h, and the ball around its rim's centre
+/// with the rim's radius, which holds the whole cap when h <= 1.
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Cap {
     axis: DVec3,
     h: f64,
+    rim_centre: DVec3,
+    rim2: f64,
+}
+
+impl Cap {
+    /// The cap of `light` around `axis`, or None when it is too big to gain from (`CAP_MAX`).
+    fn new(light: &Sphere, axis: DVec3, h: f64) -> Option<Cap> {
+        let r = light.radius;
+        (h <= CAP_MAX).then(|| Cap {
+            axis,
+            h,
+            rim_centre: light.center + axis * (r * (1.0 - h)),
+            rim2: r * r * h * (2.0 - h),
+        })
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -152,6 +172,7 @@ impl SphereLight {
 
     /// How to sample from `p`; `side` is a point just off the surface at `p` on the side the path
     /// arrived from, which decides what side of a cutting surface `p` is on.
+    #[inline]
     fn strategy(&self, p: DVec3, side: DVec3) -> Strategy {
         let to_centre = self.sphere.center - p;
         let d2 = to_centre.length_squared();
@@ -163,21 +184,18 @@ impl SphereLight {
         if d < r - tol {
             return Strategy::Inside;
         }
-        if d > r + tol {
-            let best = self
-                .clips()
-                .map(|c| c.cap_for(side))
-                .filter(|c| c.h <= CAP_MAX)
-                .min_by(|a, b| a.h.total_cmp(&b.h));
+        if d > r + tol && self.clips[0].is_some() {
+            let mut best: Option<Cap> = None;
+            for cap in self.clips().filter_map(|c| c.cap_for(side)) {
+                if best.is_none_or(|b| cap.h < b.h) {
+                    best = Some(cap);
+                }
+            }
             if let Some(cap) = best {
-                // The ball centred on the rim's centre with the rim's radius holds every point of
-                // a cap no bigger than a hemisphere (h <= 1).
-                let rim_centre = self.sphere.center + cap.axis * (r * (1.0 - cap.h));
-                let rim2 = r * r * cap.h * (2.0 - cap.h);
-                let to = rim_centre - p;
+                let to = cap.rim_centre - p;
                 let dr2 = to.length_squared();
-                if dr2 > rim2 * (1.0 + 1e-6) && dr2.is_finite() {
-                    let sin2 = rim2 / dr2;
+                if dr2 > cap.rim2 * (1.0 + 1e-6) && dr2.is_finite() {
+                    let sin2 = cap.rim2 / dr2;
                     return Strategy::CapCone {
                         cap,
                         axis: to / dr2.sqrt(),
