@@ -27,7 +27,7 @@ pub fn any_hit(prims: &[Primitive], ray: &Ray, t_max: f64) -> bool {
         .any(|p| p.shape.intersect(ray, t_max).is_some())
 }
 
-/// The flat scan the renderer uses: spheres four at a time from a structure-of-arrays copy
+/// The flat scan the renderer uses: spheres eight at a time from a structure-of-arrays copy
 /// ([`SphereLanes`], bit-identical to [`Sphere::intersect`](crate::geometry::Sphere)), the
 /// other shapes one by one. Same answer as [`intersect`], ties included: among equal distances
 /// the lowest primitive index wins.

@@ -1,18 +1,22 @@
-//! Spheres in structure-of-arrays form, tested four at a time with straight-line code the
-//! compiler vectorises (two SSE2 f64x2 operations per step on the baseline x86-64 target, no
-//! `target-cpu` needed). Same arithmetic, in the same order, as [`Sphere::intersect`], so the
-//! roots are bit-identical to the scalar test.
+//! Spheres in structure-of-arrays form, tested eight at a time with straight-line code the
+//! compiler vectorises: run-time dispatch to an AVX-512 build (one 8-wide f64 operation per
+//! step) or an AVX2 build (two 4-wide), else the baseline SSE2 code; no `target-cpu` needed.
+//! Measured on cornell's nine spheres, 2 threads, alternating: 4 lanes with AVX2 1.61-1.63 M
+//! samples/s, 8 lanes with AVX2 1.64-1.68, 8 lanes with AVX-512 1.70-1.72. Same arithmetic, in
+//! the same order, as [`Sphere::intersect`], so the roots are bit-identical to the scalar test.
 
 use crate::math::Ray;
 use crate::scene::{Primitive, Shape};
 
-const LANES: usize = 4;
+const LANES: usize = 8;
 
 #[derive(Clone, Debug, Default)]
 pub struct SphereLanes {
-    /// Whether this CPU has AVX2: then the same code is run compiled for 4-wide f64 vectors.
+    /// Whether this CPU has AVX2 / AVX-512F: then the same code is run compiled for 4- or 8-wide
+    /// f64 vectors.
     /// Rust never contracts a * b + c into an FMA, so both builds give the same bits.
     avx2: bool,
+    avx512: bool,
     cx: Vec<[f64; LANES]>,
     cy: Vec<[f64; LANES]>,
     cz: Vec<[f64; LANES]>,
@@ -26,6 +30,7 @@ impl SphereLanes {
     pub fn new(prims: &[Primitive]) -> Self {
         let mut s = SphereLanes {
             avx2: has_avx2(),
+            avx512: has_avx512(),
             ..Default::default()
         };
         let spheres: Vec<(u32, crate::geometry::Sphere)> = prims
@@ -67,10 +72,21 @@ impl SphereLanes {
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<(f64, u32)> {
         #[cfg(target_arch = "x86_64")]
+        if self.avx512 {
+            // SAFETY: `avx512` is only set when the running CPU reports AVX-512F.
+            return unsafe { self.intersect_avx512(ray, t_max) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is only set when the running CPU reports AVX2.
             return unsafe { self.intersect_avx2(ray, t_max) };
         }
+        self.intersect_portable(ray, t_max)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn intersect_avx512(&self, ray: &Ray, t_max: f64) -> Option<(f64, u32)> {
         self.intersect_portable(ray, t_max)
     }
 
@@ -124,6 +140,17 @@ impl SphereLanes {
     }
 }
 
+fn has_avx512() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
 fn has_avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
@@ -166,7 +193,7 @@ mod tests {
             });
         }
         let lanes = SphereLanes::new(&prims);
-        assert_eq!(lanes.len_groups(), 3);
+        assert_eq!(lanes.len_groups(), 11usize.div_ceil(LANES));
         for _ in 0..20_000 {
             let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 12.0 - 6.0;
             let d = warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
@@ -179,6 +206,11 @@ mod tests {
             let scalar = crate::accel::flat::intersect(&prims, &ray, t_max).map(|h| (h.t, h.prim));
             assert_eq!(lanes.intersect(&ray, t_max), scalar);
             assert_eq!(lanes.intersect_portable(&ray, t_max), scalar);
+            #[cfg(target_arch = "x86_64")]
+            if has_avx2() {
+                // SAFETY: checked just above.
+                assert_eq!(unsafe { lanes.intersect_avx2(&ray, t_max) }, scalar);
+            }
         }
     }
 }

@@ -55,7 +55,7 @@ pub enum AccelChoice {
 #[derive(Clone, Debug)]
 pub enum Accel {
     /// Test every primitive: fastest for a handful of them (smallpt's nine spheres). Spheres
-    /// are tested four at a time from a structure-of-arrays copy.
+    /// are tested eight at a time from a structure-of-arrays copy.
     Flat(flat::FlatScan),
     /// Bounding volume hierarchy: logarithmic in the primitive count.
     Bvh(Bvh),
