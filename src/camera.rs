@@ -49,11 +49,49 @@ impl Camera {
         let d = (self.forward + self.right * sx + self.up * sy).normalize();
         Ray::new(self.position + d * self.near, d)
     }
+
+    /// The inverse of [`Camera::ray`]'s direction: the raster position (fx, fy) whose ray runs
+    /// along the unit direction `d`, or None when `d` is behind the camera or off the image.
+    #[inline]
+    pub fn raster(&self, width: u32, height: u32, d: DVec3) -> Option<(f64, f64)> {
+        let cos = d.dot(self.forward);
+        if cos <= 0.0 {
+            return None;
+        }
+        let (w, h) = (width as f64, height as f64);
+        let scale = h / (2.0 * self.tan_half_vfov);
+        let fx = d.dot(self.right) / cos * scale + 0.5 * w;
+        let fy = 0.5 * h - d.dot(self.up) / cos * scale;
+        (fx >= 0.0 && fx < w && fy >= 0.0 && fy < h).then_some((fx, fy))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `raster` inverts `ray`: the direction of the ray through (fx, fy) maps back to it.
+    #[test]
+    fn raster_inverts_ray() {
+        let c = Camera::new(
+            DVec3::new(50.0, 52.0, 295.6),
+            DVec3::new(0.0, -0.042612, -1.0),
+            DVec3::Y,
+            28.8,
+            140.0,
+        );
+        for (fx, fy) in [(0.25, 0.5), (160.0, 120.0), (319.9, 239.9), (17.3, 201.6)] {
+            let d = c.ray(320, 240, fx, fy).d;
+            let (x, y) = c.raster(320, 240, d).expect("on the image");
+            assert!(
+                (x - fx).abs() < 1e-9 && (y - fy).abs() < 1e-9,
+                "{x},{y} vs {fx},{fy}"
+            );
+        }
+        assert_eq!(c.raster(320, 240, -c.forward), None);
+        let outside = c.ray(320, 240, -5.0, 100.0).d;
+        assert_eq!(c.raster(320, 240, outside), None);
+    }
 
     #[test]
     fn smallpt_camera_matches_smallpt_vectors() {

@@ -329,15 +329,11 @@ impl CausticTracer {
             bounces += 1;
             // Roulette on the dimensionless throughput, not on beta, which carries the light's
             // flux and so the scene's scale (at 1e-3 it would end nearly every path).
-            let survival = throughput;
-            if !super::russian_roulette(&mut throughput, bounces, rng.next_f64()) {
+            let Some(q) = super::roulette_survival(throughput, bounces, rng.next_f64()) else {
                 return;
-            }
-            // The same 1 / q on beta (q is a scalar, so any non-zero channel tells it).
-            let k = (0..3)
-                .find(|&c| survival[c] > 0.0)
-                .map_or(1.0, |c| throughput[c] / survival[c]);
-            beta *= k;
+            };
+            throughput /= q;
+            beta /= q;
             ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
         }
     }
@@ -355,17 +351,10 @@ impl CausticTracer {
             return;
         }
         let d = -to_cam / dist;
+        let Some((fx, fy)) = cam.raster(self.width, self.height, d) else {
+            return;
+        };
         let cos_c = d.dot(cam.forward);
-        if cos_c <= 0.0 {
-            return;
-        }
-        let (w, h) = (self.width as f64, self.height as f64);
-        let scale = h / (2.0 * cam.tan_half_vfov);
-        let fx = d.dot(cam.right) / cos_c * scale + 0.5 * w;
-        let fy = 0.5 * h - d.dot(cam.up) / cos_c * scale;
-        if !(fx >= 0.0 && fx < w && fy >= 0.0 && fy < h) {
-            return;
-        }
         let wi = -d;
         let e = scene.material(hit).eval(wo, wi, hit.n);
         if e.f_cos.max_element() <= 0.0 {

@@ -25,16 +25,30 @@ pub const RR_START_DEPTH: u32 = 2;
 /// divide beta by q. Returns false when the path ends.
 #[inline]
 pub fn russian_roulette(beta: &mut DVec3, depth: u32, u: f64) -> bool {
-    if depth < RR_START_DEPTH {
-        return true;
+    match roulette_survival(*beta, depth, u) {
+        Some(q) => {
+            *beta /= q;
+            true
+        }
+        None => false,
     }
-    let q = max_component(*beta).min(MAX_SURVIVAL);
+}
+
+/// The roulette's decision for throughput `beta`: the survival probability q the survivor's
+/// weights are divided by (1 before [`RR_START_DEPTH`]), or None when the path ends. For paths
+/// that carry another quantity beside the throughput the roulette is played on (the light
+/// tracer's flux).
+#[inline]
+pub fn roulette_survival(beta: DVec3, depth: u32, u: f64) -> Option<f64> {
+    if depth < RR_START_DEPTH {
+        return Some(1.0);
+    }
+    let q = max_component(beta).min(MAX_SURVIVAL);
     // `u < q` is false for a NaN q too, so a broken throughput ends the path.
     if u >= q || q.is_nan() || q <= 0.0 {
-        return false;
+        return None;
     }
-    *beta /= q;
-    true
+    Some(q)
 }
 
 /// The path length limit from settings (u32::MAX when unlimited).
