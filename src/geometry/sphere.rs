@@ -15,6 +15,13 @@ impl Sphere {
         Sphere { center, radius }
     }
 
+    /// Bound on the rounding error of each coordinate of a point on the surface, reprojected
+    /// onto it (see [`Sphere::hit`]): 8 eps (|centre| + r).
+    #[inline]
+    pub fn error_bound(&self) -> f64 {
+        8.0 * f64::EPSILON * (self.center.abs().max_element() + self.radius)
+    }
+
     /// Nearest root in (0, t_max), for a ray with a unit direction.
     ///
     /// With f = o - c and b = f.d, the roots of |f + t d|^2 = r^2 are t = -b +- sqrt(disc).
@@ -59,7 +66,7 @@ impl Sphere {
         let n = (ray.at(t) - self.center).normalize();
         // Reprojecting onto the surface bounds the point's error by the centre and radius alone.
         let p = self.center + n * self.radius;
-        let err = 8.0 * f64::EPSILON * (self.center.abs().max_element() + self.radius);
+        let err = self.error_bound();
         Hit { t, p, n, prim, err }
     }
 

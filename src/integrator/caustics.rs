@@ -392,8 +392,7 @@ impl CausticTracer {
             let one_minus_cos = if d2 <= r2 {
                 2.0
             } else {
-                let sin2 = r2 / d2;
-                sin2 / (1.0 + (1.0 - sin2).sqrt())
+                warp::cone_one_minus_cos(r2 / d2)
             };
             *slot = (to / d2.sqrt(), one_minus_cos);
             total += 2.0 * PI * one_minus_cos;
@@ -490,7 +489,7 @@ fn emission_point(
                 ),
                 _ => (warp::uniform_sphere(u), 4.0 * PI * r2),
             };
-            let err = 8.0 * f64::EPSILON * (s.center.abs().max_element() + s.radius);
+            let err = s.error_bound();
             Some((s.center + n * s.radius, n, err, 1.0 / area, l.emission))
         }
         (Light::Triangle(l), _) => {

@@ -179,7 +179,7 @@ impl SphereLight {
         let r = self.sphere.radius;
         // A point on the surface (within the hit points' error bound) counts as outside, with
         // the cone opened to the full hemisphere; only points clearly inside sample the sphere.
-        let tol = 16.0 * f64::EPSILON * (self.sphere.center.abs().max_element() + r);
+        let tol = 2.0 * self.sphere.error_bound();
         let d = d2.sqrt();
         if d < r - tol {
             return Strategy::Inside;
@@ -199,15 +199,14 @@ impl SphereLight {
                     return Strategy::CapCone {
                         cap,
                         axis: to / dr2.sqrt(),
-                        one_minus_cos_max: sin2 / (1.0 + (1.0 - sin2).sqrt()),
+                        one_minus_cos_max: warp::cone_one_minus_cos(sin2),
                     };
                 }
                 return Strategy::Cap(cap);
             }
         }
         let sin2_max = (r * r / d2).min(1.0);
-        // 1 - cos = sin^2 / (1 + cos): exact for tiny cones, where 1 - sqrt(1 - sin^2) is 0.
-        let one_minus_cos_max = sin2_max / (1.0 + (1.0 - sin2_max).sqrt());
+        let one_minus_cos_max = warp::cone_one_minus_cos(sin2_max);
         Strategy::Cone {
             axis: to_centre / d,
             one_minus_cos_max,

@@ -95,6 +95,13 @@ pub fn uniform_cone(u: (f64, f64), one_minus_cos_max: f64) -> DVec3 {
     DVec3::new(sin_theta * c, sin_theta * s, cos_theta)
 }
 
+/// 1 - cos(theta_max) of the cone a sphere subtends, from sin^2(theta_max) = r^2 / d^2:
+/// sin^2 / (1 + cos), exact for tiny cones, where 1 - sqrt(1 - sin^2) rounds to 0.
+#[inline]
+pub fn cone_one_minus_cos(sin2_max: f64) -> f64 {
+    sin2_max / (1.0 + (1.0 - sin2_max).sqrt())
+}
+
 pub fn uniform_cone_pdf(one_minus_cos_max: f64) -> f64 {
     1.0 / (2.0 * PI * one_minus_cos_max)
 }
