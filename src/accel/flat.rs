@@ -4,7 +4,7 @@
 use super::lanes::SphereLanes;
 use crate::geometry::Hit;
 use crate::math::Ray;
-use crate::scene::{Primitive, Shape};
+use crate::scene::Primitive;
 
 #[inline]
 pub fn intersect(prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<Hit> {
@@ -45,7 +45,7 @@ impl FlatScan {
             others: prims
                 .iter()
                 .enumerate()
-                .filter(|(_, p)| !matches!(p.shape, Shape::Sphere(_)))
+                .filter(|(_, p)| p.shape.as_sphere().is_none())
                 .map(|(i, _)| i as u32)
                 .collect(),
         }

@@ -6,7 +6,7 @@
 //! the same order, as [`Sphere::intersect`], so the roots are bit-identical to the scalar test.
 
 use crate::math::Ray;
-use crate::scene::{Primitive, Shape};
+use crate::scene::Primitive;
 
 const LANES: usize = 8;
 
@@ -36,11 +36,7 @@ impl SphereLanes {
         let spheres: Vec<(u32, crate::geometry::Sphere)> = prims
             .iter()
             .enumerate()
-            .filter_map(|(i, p)| match p.shape {
-                Shape::Sphere(sp) => Some((i as u32, sp)),
-                #[allow(unreachable_patterns)]
-                _ => None,
-            })
+            .filter_map(|(i, p)| p.shape.as_sphere().map(|sp| (i as u32, *sp)))
             .collect();
         for chunk in spheres.chunks(LANES) {
             let mut cx = [f64::INFINITY; LANES];
@@ -168,6 +164,7 @@ mod tests {
     use crate::geometry::Sphere;
     use crate::math::DVec3;
     use crate::sampling::{warp, Rng};
+    use crate::scene::Shape;
 
     /// The lanes give exactly the scalar test's answer: same sphere, same bits.
     #[test]

@@ -27,7 +27,7 @@ use crate::light::Light;
 use crate::material::MaterialKind;
 use crate::math::{luminance, DVec3, Frame, Ray};
 use crate::sampling::{warp, Rng};
-use crate::scene::{Scene, Shape};
+use crate::scene::Scene;
 use crate::settings::{Caustics, IntegratorKind, RenderSettings};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -135,10 +135,9 @@ impl CausticTracer {
             if !scene.materials[p.material as usize].is_delta() {
                 continue;
             }
-            match p.shape {
-                Shape::Sphere(s) => targets.push(s),
-                #[allow(unreachable_patterns)]
-                _ => return Err("path-traced (a mirror or glass object is not a sphere)".into()),
+            match p.shape.as_sphere() {
+                Some(s) => targets.push(*s),
+                None => return Err("path-traced (a mirror or glass object is not a sphere)".into()),
             }
         }
         if targets.is_empty() {

@@ -282,14 +282,7 @@ fn build(
 /// Sphere lights cut by other spheres' surfaces learn the cuts, so light sampling can leave out
 /// the parts hidden behind them (see `light::sphere`).
 fn clip_sphere_lights(lights: Vec<Light>, prims: &[Primitive]) -> Vec<Light> {
-    let spheres: Vec<&Sphere> = prims
-        .iter()
-        .filter_map(|p| match &p.shape {
-            Shape::Sphere(s) => Some(s),
-            #[allow(unreachable_patterns)]
-            _ => None,
-        })
-        .collect();
+    let spheres: Vec<&Sphere> = prims.iter().filter_map(|p| p.shape.as_sphere()).collect();
     lights
         .into_iter()
         .map(|l| match l {

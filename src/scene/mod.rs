@@ -27,6 +27,15 @@ pub enum Shape {
 }
 
 impl Shape {
+    /// The sphere, if this is one.
+    #[inline]
+    pub fn as_sphere(&self) -> Option<&Sphere> {
+        match self {
+            Shape::Sphere(s) => Some(s),
+            Shape::Triangle(_) => None,
+        }
+    }
+
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<f64> {
         match self {
