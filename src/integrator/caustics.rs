@@ -23,7 +23,7 @@
 
 use crate::camera::Camera;
 use crate::geometry::{spawn_origin, Hit, Sphere};
-use crate::light::Light;
+use crate::light::{sphere::on_cap, Light};
 use crate::material::MaterialKind;
 use crate::math::{luminance, DVec3, Frame, Ray};
 use crate::sampling::{warp, Rng};
@@ -61,9 +61,9 @@ const PILOT_MIN_HIT_RATE: f64 = 0.01;
 pub enum Region {
     /// All of a sphere, left outwards.
     Sphere,
-    /// A sphere's cap (x - centre) / r . axis >= 1 - h, left outwards: the part of a light cut
-    /// by another sphere's surface that lies on the specular objects' side.
-    Cap { centre: DVec3, axis: DVec3, h: f64 },
+    /// A sphere's cap n . axis >= 1 - h (n the outward normal), left outwards: the part of a
+    /// light cut by another sphere's surface that lies on the specular objects' side.
+    Cap { axis: DVec3, h: f64 },
     /// A triangle, both sides (triangle emitters are two-sided).
     Triangle,
 }
@@ -221,19 +221,16 @@ impl CausticTracer {
         )
     }
 
-    /// Whether emission of light `light`, hit at `x` (outward normal `n`) by a ray along `d`, is
+    /// Whether emission of light `light`, hit where its outward normal is `n` by a ray along `d`, is
     /// the tracer's: the camera path reached it from a diffuse first hit through at least one
     /// specular bounce (the caller checks that), so it must not count it again.
     #[inline]
-    pub fn covers(&self, light: u32, x: DVec3, n: DVec3, d: DVec3) -> bool {
+    pub fn covers(&self, light: u32, n: DVec3, d: DVec3) -> bool {
         match self.regions.get(light as usize).copied().flatten() {
             None => false,
             Some(Region::Triangle) => true,
             Some(Region::Sphere) => d.dot(n) < 0.0,
-            Some(Region::Cap { centre, axis, h }) => {
-                let u = (x - centre).normalize();
-                d.dot(n) < 0.0 && 0.5 * (u - axis).length_squared() <= h
-            }
+            Some(Region::Cap { axis, h }) => d.dot(n) < 0.0 && on_cap(n, axis, h),
         }
     }
 
@@ -463,8 +460,7 @@ fn sphere_region(l: &crate::light::sphere::SphereLight, targets: &[Sphere]) -> (
         };
         let area = 2.0 * PI * r2 * h;
         if area < best.1 {
-            let centre = l.sphere.center;
-            best = (Region::Cap { centre, axis, h }, area);
+            best = (Region::Cap { axis, h }, area);
         }
     }
     best

@@ -52,7 +52,7 @@ pub fn radiance(
             && delta_run > 0
             && caustics.is_some_and(|c| {
                 prim.light
-                    .is_some_and(|light| c.covers(light, hit.p, hit.n, ray.d))
+                    .is_some_and(|light| c.covers(light, hit.n, ray.d))
             });
         if material.is_delta() {
             delta_run += 1;

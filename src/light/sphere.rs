@@ -87,6 +87,13 @@ impl Clip {
     }
 }
 
+/// Whether the sphere point with unit normal `n` lies on the cap n . axis >= 1 - h. 1 - n.axis
+/// is taken as |n - axis|^2 / 2: exact near the cap's pole, where 1 - n.axis would cancel.
+#[inline]
+pub fn on_cap(n: DVec3, axis: DVec3, h: f64) -> bool {
+    0.5 * (n - axis).length_squared() <= h
+}
+
 /// The light's points x with (x - c) / r . axis >= 1 - h, and the ball around its rim's centre
 /// with the rim's radius, which holds the whole cap when h <= 1.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -337,9 +344,11 @@ impl SphereLight {
 
     /// Whether `x`, a point on the sphere, lies on `cap`.
     fn in_cap(&self, cap: Cap, x: DVec3) -> bool {
-        let n = (x - self.sphere.center) / self.sphere.radius;
-        // 1 - n.axis, from |n - axis|^2 / 2: exact near the cap's pole.
-        0.5 * (n - cap.axis).length_squared() <= cap.h
+        on_cap(
+            (x - self.sphere.center) / self.sphere.radius,
+            cap.axis,
+            cap.h,
+        )
     }
 
     fn cap_area(&self, cap: Cap) -> f64 {
