@@ -10,6 +10,10 @@ use crate::scene::Primitive;
 
 const LANES: usize = 8;
 
+/// A last group this small is tested one sphere at a time: a vector pass costs the same eight
+/// divisions and square roots whether one lane is real or eight, and scalar ones are cheaper.
+const SCALAR_TAIL: usize = 2;
+
 #[derive(Clone, Debug, Default)]
 pub struct SphereLanes {
     /// Whether this CPU has AVX2 / AVX-512F: then the same code is run compiled for 4- or 8-wide
@@ -22,6 +26,10 @@ pub struct SphereLanes {
     cz: Vec<[f64; LANES]>,
     r2: Vec<[f64; LANES]>,
     prim: Vec<[u32; LANES]>,
+    /// The spheres after the last full group when there are at most [`SCALAR_TAIL`] of them;
+    /// their indices are above every grouped sphere's, so testing them last keeps the
+    /// lowest-index-wins order of ties.
+    tail: Vec<(crate::geometry::Sphere, u32)>,
 }
 
 impl SphereLanes {
@@ -38,7 +46,13 @@ impl SphereLanes {
             .enumerate()
             .filter_map(|(i, p)| p.shape.as_sphere().map(|sp| (i as u32, *sp)))
             .collect();
-        for chunk in spheres.chunks(LANES) {
+        let tail_len = match spheres.len() % LANES {
+            n if n <= SCALAR_TAIL => n,
+            _ => 0,
+        };
+        let (grouped, tail) = spheres.split_at(spheres.len() - tail_len);
+        s.tail = tail.iter().map(|(i, sp)| (*sp, *i)).collect();
+        for chunk in grouped.chunks(LANES) {
             let mut cx = [f64::INFINITY; LANES];
             let mut cy = [f64::INFINITY; LANES];
             let mut cz = [f64::INFINITY; LANES];
@@ -132,6 +146,12 @@ impl SphereLanes {
                 }
             }
         }
+        for (sphere, prim) in &self.tail {
+            if let Some(t) = sphere.intersect(ray, best) {
+                best = t;
+                best_prim = *prim;
+            }
+        }
         (best_prim != u32::MAX).then_some((best, best_prim))
     }
 }
@@ -191,6 +211,9 @@ mod tests {
         }
         let lanes = SphereLanes::new(&prims);
         assert_eq!(lanes.len_groups(), 11usize.div_ceil(LANES));
+        // 9 spheres: one group of eight and one tested alone.
+        let nine = SphereLanes::new(&prims[..9]);
+        assert_eq!((nine.len_groups(), nine.tail.len()), (1, 1));
         for _ in 0..20_000 {
             let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 12.0 - 6.0;
             let d = warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
@@ -202,6 +225,9 @@ mod tests {
             };
             let scalar = crate::accel::flat::intersect(&prims, &ray, t_max).map(|h| (h.t, h.prim));
             assert_eq!(lanes.intersect(&ray, t_max), scalar);
+            let scalar9 =
+                crate::accel::flat::intersect(&prims[..9], &ray, t_max).map(|h| (h.t, h.prim));
+            assert_eq!(nine.intersect(&ray, t_max), scalar9);
             assert_eq!(lanes.intersect_portable(&ray, t_max), scalar);
             #[cfg(target_arch = "x86_64")]
             if has_avx2() {
