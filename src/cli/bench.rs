@@ -4,6 +4,7 @@
 //! ([`error`]).
 
 pub mod error;
+pub mod smallpt;
 
 use super::{BenchArgs, BenchTarget};
 use crate::accel::{bench, BVH_CROSSOVER};
@@ -37,7 +38,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             println!("crossover used by the scene build (accel::BVH_CROSSOVER): {BVH_CROSSOVER}");
         }
         BenchTarget::Scenes => scenes(args.spp)?,
-        BenchTarget::Error => error::run(args.seconds, &args.reference)?,
+        BenchTarget::Error => error::run(args.seconds, &args.reference, args.smallpt.as_deref())?,
     }
     Ok(())
 }

@@ -68,6 +68,10 @@ pub struct BenchArgs {
         default_value = "../shared/refs/cornell.exr"
     )]
     pub reference: PathBuf,
+    /// `error`: also run this build of `benches/smallpt/smallpt.cpp` (before and after ptui's
+    /// series) and print the targets as ratios to it, measured in the same run.
+    #[arg(long, value_name = "BIN")]
+    pub smallpt: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]

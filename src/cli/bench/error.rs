@@ -55,8 +55,14 @@ const PLAN: [(&str, bool, &[SamplerKind]); 2] = [
 ];
 const INTEGRATORS: [IntegratorKind; 2] = [IntegratorKind::Path, IntegratorKind::Naive];
 
-pub fn run(seconds: f64, reference_path: &Path) -> anyhow::Result<()> {
+pub fn run(seconds: f64, reference_path: &Path, smallpt: Option<&Path>) -> anyhow::Result<()> {
     let reference = load_reference(reference_path)?;
+    let mut baseline = Vec::new();
+    if let Some(bin) = smallpt {
+        let run = super::smallpt::run(bin, seconds, &reference)?;
+        println!("{}", baseline_row(&run));
+        baseline.push(run);
+    }
     println!(
         "{WIDTH}x{HEIGHT}, {THREADS} threads, errors at {seconds} s of render time; rays = \
          closest-hit queries; RMSE against {}",
@@ -64,8 +70,104 @@ pub fn run(seconds: f64, reference_path: &Path) -> anyhow::Result<()> {
     );
     println!("{}", table_header());
     let bench = measure(seconds, &reference, |row| println!("{}", table_row(row)))?;
+    if let Some(bin) = smallpt {
+        let run = super::smallpt::run(bin, seconds, &reference)?;
+        println!("{}", baseline_row(&run));
+        baseline.push(run);
+    }
     print!("{}", ratios(&bench));
+    if !baseline.is_empty() {
+        print!("{}", targets(&bench, &baseline));
+    }
     Ok(())
+}
+
+/// smallpt's run as a table row (its RMSE as measured at its own end time, in the spp column's
+/// run; the targets use it scaled to the bench's time).
+fn baseline_row(run: &super::smallpt::BaselineRun) -> String {
+    format!(
+        "| cornell (smallpt, {:.2} s) | naive | erand48 | {:.3} | - | {} | {:.5} | - |",
+        run.seconds,
+        run.paths_per_second / 1e6,
+        run.spp,
+        run.rmse
+    )
+}
+
+/// The issue's absolute targets were set on a machine where smallpt ran 2.6 M paths/s; as ratios
+/// to smallpt they hold on any machine.
+const SMALLPT_REFERENCE_SPEED: f64 = 2.6e6;
+
+/// The performance issue's targets as ratios to smallpt measured in this run.
+pub fn targets(bench: &ErrorBench, baseline: &[super::smallpt::BaselineRun]) -> String {
+    let (speed, rmse) = super::smallpt::mean(baseline, bench.seconds);
+    let find = |scene: &str, integrator: &str| {
+        bench
+            .rows
+            .iter()
+            .find(|r| r.scene == scene && r.series.integrator == integrator)
+    };
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "smallpt (mean of {} runs): {:.3} M paths/s, RMSE {:.5} at {} s",
+        baseline.len(),
+        speed / 1e6,
+        rmse,
+        bench.seconds
+    );
+    for (scene, integrator, target) in [
+        ("cornell", "naive", 6.0e6),
+        ("cornell", "path", 4.5e6),
+        ("cornell-small-light", "path", 4.0e6),
+    ] {
+        // Every sampler measured: smallpt's own is independent (erand48), ptui's default Sobol.
+        for r in bench
+            .rows
+            .iter()
+            .filter(|r| r.scene == scene && r.series.integrator == integrator)
+        {
+            let ratio = r.paths_per_second / speed;
+            let want = target / SMALLPT_REFERENCE_SPEED;
+            let _ = writeln!(
+                out,
+                "target {scene} {} paths/s >= {:.1} M on a 2.6 M smallpt machine: {ratio:.2}x \
+                 smallpt, want >= {want:.2}x: {}",
+                r.series.label(),
+                target / 1e6,
+                verdict(ratio >= want)
+            );
+        }
+    }
+    if let Some(e) = find("cornell", "path").and_then(|r| r.rmse) {
+        let ratio = e / rmse;
+        let _ = writeln!(
+            out,
+            "target cornell path RMSE at {} s <= smallpt's / 3: {ratio:.3}x smallpt's, want <= 0.333: {}",
+            bench.seconds,
+            verdict(ratio <= 1.0 / 3.0)
+        );
+    }
+    if let (Some(p), Some(n)) = (
+        find("cornell-small-light", "path"),
+        find("cornell-small-light", "naive"),
+    ) {
+        let ratio = n.est_rmse / p.est_rmse;
+        let _ = writeln!(
+            out,
+            "target cornell-small-light est. RMSE naive / path >= 5: {ratio:.2}: {}",
+            verdict(ratio >= 5.0)
+        );
+    }
+    out
+}
+
+fn verdict(met: bool) -> &'static str {
+    if met {
+        "met"
+    } else {
+        "not met"
+    }
 }
 
 /// Render every combination of [`PLAN`] for `seconds` each, calling `on_row` as each finishes.
@@ -284,6 +386,35 @@ mod tests {
             ),
             "{text}"
         );
+    }
+
+    #[test]
+    fn targets_are_ratios_to_the_smallpt_runs() {
+        let rows = vec![
+            row("cornell", series("path", &[(10.0, 0.03)]), 10.0),
+            row("cornell", series("naive", &[(10.0, 0.05)]), 10.0),
+            row("cornell-small-light", series("path", &[(10.0, 0.1)]), 10.0),
+            row("cornell-small-light", series("naive", &[(10.0, 0.6)]), 10.0),
+        ];
+        let bench = ErrorBench {
+            seconds: 10.0,
+            rows,
+        };
+        let run = super::super::smallpt::BaselineRun {
+            spp: 100,
+            seconds: 10.0,
+            paths_per_second: 0.5e6,
+            rmse: 0.1,
+        };
+        let text = targets(&bench, &[run, run]);
+        // Every series runs at 1 M paths/s in `series`: 2x smallpt.
+        assert!(text.contains("cornell naive/sobol paths/s >= 6.0 M on a 2.6 M smallpt machine: 2.00x smallpt, want >= 2.31x: not met"), "{text}");
+        assert!(text.contains("cornell path/sobol paths/s >= 4.5 M on a 2.6 M smallpt machine: 2.00x smallpt, want >= 1.73x: met"), "{text}");
+        assert!(
+            text.contains("RMSE at 10 s <= smallpt's / 3: 0.300x smallpt's, want <= 0.333: met"),
+            "{text}"
+        );
+        assert!(text.contains("naive / path >= 5: 6.00: met"), "{text}");
     }
 
     #[test]
