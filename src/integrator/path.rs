@@ -8,7 +8,7 @@
 //! the emission counts in full.
 
 use super::caustics::CausticTracer;
-use super::russian_roulette;
+use super::{russian_roulette, RR_START_DEPTH};
 use crate::geometry::{spawn_origin, Hit};
 use crate::light::LightSample;
 use crate::material::Material;
@@ -77,12 +77,13 @@ pub fn radiance(
             l += beta * direct_light(scene, &hit, wo, material, sampler, true);
         } else if nee {
             // Keep the dimension count per bounce fixed so samplers stay aligned.
-            sampler.get_1d();
-            sampler.get_2d();
+            sampler.get_1d_if(false);
+            sampler.get_2d_if(false);
         }
 
-        let u_lobe = sampler.get_1d();
-        let u = sampler.get_2d();
+        let (uses_lobe, uses_dir) = material.sample_uses();
+        let u_lobe = sampler.get_1d_if(uses_lobe);
+        let u = sampler.get_2d_if(uses_dir);
         let Some(bs) = material.sample(wo, hit.n, u_lobe, u) else {
             break;
         };
@@ -92,7 +93,8 @@ pub fn radiance(
         prev_p = hit.p;
         prev_side = spawn_origin(hit.p, hit.n, hit.err, wo);
         depth += 1;
-        if !russian_roulette(&mut beta, depth, sampler.get_1d()) {
+        let u_rr = sampler.get_1d_if(depth >= RR_START_DEPTH);
+        if !russian_roulette(&mut beta, depth, u_rr) {
             break;
         }
         ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);

@@ -64,6 +64,17 @@ impl Material {
         !matches!(self.kind, MaterialKind::Diffuse)
     }
 
+    /// Which of [`Material::sample`]'s random numbers it reads: (`u_lobe`, `u`). The integrators
+    /// skip computing the others (the sampler still advances, so every path keeps its numbers).
+    #[inline]
+    pub fn sample_uses(&self) -> (bool, bool) {
+        match self.kind {
+            MaterialKind::Diffuse => (false, true),
+            MaterialKind::Mirror => (false, false),
+            MaterialKind::Glass { .. } => (true, false),
+        }
+    }
+
     /// Sample an incident direction for outgoing `wo` (unit, pointing away from the surface) at a
     /// surface with geometric normal `n`. `u_lobe` picks between reflection and refraction.
     #[inline]

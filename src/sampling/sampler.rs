@@ -92,6 +92,32 @@ impl Sampler {
         }
     }
 
+    /// [`Sampler::get_1d`] when `used`; otherwise the dimension is passed over without computing
+    /// its value (Sobol points are per dimension; the independent stream still draws, so its
+    /// later numbers stay where they were) and the value returned is meaningless.
+    #[inline]
+    pub fn get_1d_if(&mut self, used: bool) -> f64 {
+        match &mut self.source {
+            Source::Sobol(_) if !used => {
+                self.dim += 1;
+                0.5
+            }
+            _ => self.get_1d(),
+        }
+    }
+
+    /// [`Sampler::get_2d`] when `used`, else passed over as in [`Sampler::get_1d_if`].
+    #[inline]
+    pub fn get_2d_if(&mut self, used: bool) -> (f64, f64) {
+        match &mut self.source {
+            Source::Sobol(_) if !used => {
+                self.dim += 1;
+                (0.5, 0.5)
+            }
+            _ => self.get_2d(),
+        }
+    }
+
     #[inline]
     pub fn get_2d(&mut self) -> (f64, f64) {
         match &mut self.source {
