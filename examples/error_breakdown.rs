@@ -43,6 +43,15 @@ fn main() -> anyhow::Result<()> {
             rest
         );
     }
+    for &(s, i) in se.iter().take(8) {
+        let (x, y) = (i as u32 % img.width, i as u32 / img.width);
+        let px = |d: &[f32]| format!("{:.3} {:.3} {:.3}", d[3 * i], d[3 * i + 1], d[3 * i + 2]);
+        println!(
+            "pixel ({x}, {y}): squared error {s:.4}, image {} reference {}",
+            px(&img.data),
+            px(&rf.data)
+        );
+    }
     if let Some(out) = args.get(3) {
         let p99 = se[n / 100].0.max(1e-12);
         let mut buf = vec![0u8; n * 3];

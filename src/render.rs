@@ -7,7 +7,7 @@
 
 use crate::film::{ErrorEstimate, Film};
 use crate::integrator;
-use crate::integrator::caustics::{CausticTracer, PassSplats};
+use crate::integrator::caustics::{CausticPass, CausticTracer, PassSplats};
 use crate::math::DVec3;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -197,7 +197,11 @@ impl Renderer {
         self.stats.light_rays += splats.rays;
         self.stats.light_paths += splats.paths;
         let splats = &splats;
-        let caustics = self.caustics.as_ref();
+        let caustics = self.caustics.as_ref().map(|tracer| CausticPass {
+            tracer,
+            vertices: &splats.vertices,
+            light_paths: splats.paths,
+        });
         let film = &mut self.film;
         self.pool.install(|| {
             film.par_bands(band_rows).for_each(|mut band| {
@@ -271,7 +275,8 @@ pub fn sample_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, pa
 }
 
 /// [`sample_pixel`] and the number of closest-hit queries its path traced. With `caustics`,
-/// the camera path leaves out the caustics the tracer estimates.
+/// the camera path leaves out the caustics the tracer splats and shares with its vertices the
+/// caustics seen after a bounce.
 #[inline]
 pub fn sample_pixel_counted(
     scene: &Scene,
@@ -279,7 +284,7 @@ pub fn sample_pixel_counted(
     x: u32,
     y: u32,
     pass: u32,
-    caustics: Option<&CausticTracer>,
+    caustics: Option<CausticPass>,
 ) -> (DVec3, u32) {
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, pass as u64);

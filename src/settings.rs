@@ -44,15 +44,19 @@ impl IntegratorKind {
     }
 }
 
-/// How the `path` integrator estimates caustics seen directly (light reaching a diffuse surface
-/// the camera sees through one or more mirror or glass bounces).
+/// How the `path` integrator estimates caustics (light reaching a diffuse surface through one or
+/// more mirror or glass bounces), seen directly or after a diffuse bounce.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Caustics {
-    /// Trace them from the lights and connect to the camera, where the scene allows (its mirror
-    /// and glass objects are all spheres, no depth limit): still unbiased, far less noisy.
+    /// Trace them from the lights, where the scene allows (its mirror and glass objects are all
+    /// spheres, no depth limit): connect their ends to the camera, and to the camera paths'
+    /// diffuse vertices by MIS: still unbiased, far less noisy.
     #[default]
     Light,
+    /// As `light`, but only caustics seen directly: no joins to camera vertices (cheaper per
+    /// path, noisier; for comparison).
+    LightDirect,
     /// Leave them to the camera paths' BSDF sampling, like every other path.
     Path,
 }
@@ -61,6 +65,7 @@ impl Caustics {
     pub fn name(self) -> &'static str {
         match self {
             Caustics::Light => "light",
+            Caustics::LightDirect => "light-direct",
             Caustics::Path => "path",
         }
     }

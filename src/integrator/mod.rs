@@ -73,7 +73,7 @@ pub fn radiance(
     ray: Ray,
     sampler: &mut Sampler,
     px: PixelSample,
-    caustics: Option<&caustics::CausticTracer>,
+    caustics: Option<caustics::CausticPass>,
 ) -> DVec3 {
     let max_depth = depth_limit(settings);
     match settings.integrator {
