@@ -50,6 +50,17 @@ impl Frame {
     }
 }
 
+/// The six unit axis directions, the cases where frames and encodings of directions are most
+/// likely to divide by zero (tests sweep them).
+pub const SIGNED_AXES: [DVec3; 6] = [
+    DVec3::X,
+    DVec3::NEG_X,
+    DVec3::Y,
+    DVec3::NEG_Y,
+    DVec3::Z,
+    DVec3::NEG_Z,
+];
+
 /// Largest component, the usual throughput measure for Russian roulette.
 pub fn max_component(v: DVec3) -> f64 {
     v.x.max(v.y).max(v.z)
@@ -66,17 +77,11 @@ mod tests {
 
     #[test]
     fn frame_is_orthonormal_for_axis_normals() {
-        let normals = [
-            DVec3::X,
-            -DVec3::X,
-            DVec3::Y,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
+        let normals = SIGNED_AXES.into_iter().chain([
             DVec3::new(0.0, 0.0, -0.0),
             DVec3::new(1.0, 2.0, -3.0).normalize(),
             DVec3::new(1e-12, 0.0, -1.0).normalize(),
-        ];
+        ]);
         for n in normals {
             let n = if n.length_squared() == 0.0 {
                 -DVec3::Z

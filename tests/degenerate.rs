@@ -63,14 +63,7 @@ fn light_sampling_from_every_axis() {
     for &(c, r) in SPHERES {
         let sphere = Sphere::new(DVec3::from_array(c), r);
         let light = SphereLight::new(0, sphere, DVec3::ONE);
-        for axis in [
-            DVec3::X,
-            -DVec3::X,
-            DVec3::Y,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ] {
+        for axis in ptui::math::SIGNED_AXES {
             // A point 3 radii out along the axis: the cone's axis is exactly -axis.
             let p = sphere.center + axis * (3.0 * r);
             for _ in 0..1000 {

@@ -737,16 +737,8 @@ mod tests {
     fn unit_vectors_round_trip_and_vertices_stay_small() {
         let mut rng = Rng::new(5);
         let mut worst = 0.0f64;
-        let axes = [
-            DVec3::X,
-            -DVec3::X,
-            DVec3::Y,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ];
         for i in 0..100_000 {
-            let v = match axes.get(i) {
+            let v = match crate::math::SIGNED_AXES.get(i) {
                 Some(a) => *a,
                 None => warp::uniform_sphere((rng.next_f64(), rng.next_f64())),
             };
