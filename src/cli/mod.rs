@@ -125,7 +125,8 @@ pub struct SettingsArgs {
     /// Sample sequence: Owen-scrambled Sobol or independent random numbers.
     #[arg(long, value_enum)]
     pub sampler: Option<SamplerKind>,
-    /// Caustics seen directly (`path` only): traced from the lights, or left to camera paths.
+    /// Caustics (`path` only): traced from the lights and joined to camera paths, traced for
+    /// the ones seen directly only, or left to the camera paths.
     #[arg(long, value_enum)]
     pub caustics: Option<crate::settings::Caustics>,
     /// Longest path in bounces (default: unlimited, Russian roulette ends paths).
