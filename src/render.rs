@@ -221,7 +221,7 @@ impl Renderer {
                             sample_pixel_counted(scene, settings, x, y, pass, caustics);
                         let pixel = y * settings.width + x;
                         while let Some(s) = band_splats.next_if(|s| s.0 == pixel) {
-                            v += DVec3::new(s.1[0] as f64, s.1[1] as f64, s.1[2] as f64);
+                            v += glam::Vec3::from_array(s.1).as_dvec3();
                         }
                         done += 1;
                         traced += r as u64;

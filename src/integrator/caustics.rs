@@ -150,11 +150,7 @@ impl CausticVertex {
     }
 
     pub fn alpha(&self) -> DVec3 {
-        DVec3::new(
-            self.alpha[0] as f64,
-            self.alpha[1] as f64,
-            self.alpha[2] as f64,
-        )
+        glam::Vec3::from_array(self.alpha).as_dvec3()
     }
 }
 
@@ -190,9 +186,7 @@ pub struct CausticPass<'a> {
 #[derive(Clone, Debug)]
 pub struct CausticTracer {
     emitters: Vec<Emitter>,
-    /// Per light index: its region, if the tracer covers it.
-    regions: Vec<Option<Region>>,
-    /// Per light index: its emitter, if the tracer starts paths there.
+    /// Per light index: its emitter (and so its region), if the tracer starts paths there.
     emitter_of: Vec<Option<usize>>,
     targets: Vec<Sphere>,
     camera: Camera,
@@ -247,7 +241,6 @@ impl CausticTracer {
             ));
         }
         let mut emitters = Vec::new();
-        let mut regions = vec![None; scene.lights.len()];
         let mut emitter_of = vec![None; scene.lights.len()];
         for (i, light) in scene.lights.lights.iter().enumerate() {
             let (region, area) = match light {
@@ -263,7 +256,6 @@ impl CausticTracer {
                     pmf: power,
                     area,
                 });
-                regions[i] = Some(region);
             }
         }
         let total: f64 = emitters.iter().map(|e| e.pmf).sum();
@@ -280,7 +272,6 @@ impl CausticTracer {
         let pixel_area = (2.0 * tan / h as f64).powi(2);
         let tracer = CausticTracer {
             emitters,
-            regions,
             emitter_of,
             targets,
             camera: scene.camera,
@@ -343,7 +334,7 @@ impl CausticTracer {
     /// specular bounce (the caller checks that), so it must not count it again.
     #[inline]
     pub fn covers(&self, light: u32, n: DVec3, d: DVec3) -> bool {
-        match self.regions.get(light as usize).copied().flatten() {
+        match self.emitter(light).map(|e| e.region) {
             None => false,
             Some(Region::Triangle) => true,
             Some(Region::Sphere) => d.dot(n) < 0.0,
@@ -377,6 +368,12 @@ impl CausticTracer {
         // Stable: splats of one pixel keep the order of their paths, so sums are reproducible.
         all.splats.sort_by_key(|s| s.0);
         all
+    }
+
+    /// The emitter on light `light`, if the tracer starts paths there.
+    fn emitter(&self, light: u32) -> Option<&Emitter> {
+        let i = self.emitter_of.get(light as usize).copied().flatten()?;
+        self.emitters.get(i)
     }
 
     fn pick_emitter(&self, u: f64) -> &Emitter {
@@ -437,12 +434,11 @@ impl CausticTracer {
                     if !self.connect {
                         return;
                     }
-                    let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
                     let vertex = CausticVertex {
                         p: hit.p,
                         n: encode_unit(hit.n),
                         wo: encode_unit(wo),
-                        alpha: f32s(beta),
+                        alpha: beta.as_vec3().to_array(),
                         err: hit.err as f32,
                         material: scene.prims[hit.prim as usize].material,
                         p_light: (p_light * chain_cos / cos0) as f32,
@@ -512,8 +508,7 @@ impl CausticTracer {
             return;
         }
         let pixel = fy as u32 * self.width + fx as u32;
-        out.splats
-            .push((pixel, [v.x as f32, v.y as f32, v.z as f32]));
+        out.splats.push((pixel, v.as_vec3().to_array()));
     }
 
     /// The cones from `y` towards the target spheres: (axis, 1 - cos) each (1 - cos = 2 from
@@ -577,13 +572,7 @@ impl CausticTracer {
     /// (emitter pmf x area pdf x direction pdf), as [`CausticVertex::p_light`] records it; 0
     /// where the tracer does not start paths. Only for points the tracer covers.
     pub fn light_pdf(&self, light: u32, z: DVec3, w: DVec3) -> f64 {
-        let Some(e) = self
-            .emitter_of
-            .get(light as usize)
-            .copied()
-            .flatten()
-            .map(|i| self.emitters[i])
-        else {
+        let Some(e) = self.emitter(light) else {
             return 0.0;
         };
         let (cones, total) = self.cones(z);
