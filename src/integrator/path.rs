@@ -68,8 +68,7 @@ pub fn radiance(
                     (Some(c), Some(pdf), Some(light)) if covered => {
                         let cos_z = hit.n.dot(ray.d).abs();
                         let p_light = c.tracer.light_pdf(light, hit.p, -ray.d);
-                        let r = connection_ratio(p_light, pdf * cos_z);
-                        1.0 / (1.0 + r * r)
+                        power_heuristic(1.0, connection_ratio(p_light, pdf * cos_z))
                     }
                     _ => 1.0,
                 }
@@ -179,9 +178,7 @@ fn connect_caustic(
     let g_xy = n_y.dot(dir).abs() / d2;
     let cos_y_in = n_y.dot(wo_y).abs();
     let r = connection_ratio(v.p_light as f64, e_x.pdf * g_xy * pdf_y / cos_y_in);
-    // Power heuristic r^2 / (1 + r^2), written so that r = inf gives 1 and r^2 cannot overflow.
-    let inv = 1.0 / r;
-    let w = 1.0 / (1.0 + inv * inv);
+    let w = power_heuristic(r, 1.0);
     if w.is_nan() || w <= 0.0 {
         return (DVec3::ZERO, false);
     }

@@ -119,11 +119,13 @@ pub fn uniform_triangle(u: (f64, f64)) -> (f64, f64) {
 }
 
 /// Power heuristic with beta = 2 (Veach): the weight of a strategy with pdf `f` against `g`.
+/// Also takes a density ratio (`f` = r, `g` = 1): an infinite f, or one whose square overflows,
+/// weighs 1 rather than inf / inf.
 pub fn power_heuristic(f: f64, g: f64) -> f64 {
-    if f.is_infinite() {
+    let (f2, g2) = (f * f, g * g);
+    if f2.is_infinite() {
         return 1.0;
     }
-    let (f2, g2) = (f * f, g * g);
     if f2 + g2 == 0.0 {
         0.0
     } else {
@@ -144,6 +146,16 @@ mod tests {
             assert!((s - phi.sin()).abs() < 1e-13, "sin at u={u}");
             assert!((c - phi.cos()).abs() < 1e-13, "cos at u={u}");
         }
+    }
+
+    #[test]
+    fn power_heuristic_survives_infinite_and_overflowing_ratios() {
+        assert_eq!(power_heuristic(f64::INFINITY, 1.0), 1.0);
+        assert_eq!(power_heuristic(1e200, 1.0), 1.0);
+        assert_eq!(power_heuristic(1.0, 1e200), 0.0);
+        assert_eq!(power_heuristic(1.0, f64::INFINITY), 0.0);
+        assert_eq!(power_heuristic(0.0, 0.0), 0.0);
+        assert_eq!(power_heuristic(3.0, 1.0), 0.9);
     }
 
     #[test]
