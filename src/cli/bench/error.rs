@@ -58,11 +58,16 @@ const INTEGRATORS: [IntegratorKind; 2] = [IntegratorKind::Path, IntegratorKind::
 pub fn run(seconds: f64, reference_path: &Path, smallpt: Option<&Path>) -> anyhow::Result<()> {
     let reference = load_reference(reference_path)?;
     let mut baseline = Vec::new();
-    if let Some(bin) = smallpt {
-        let run = super::smallpt::run(bin, seconds, &reference)?;
-        println!("{}", baseline_row(&run));
-        baseline.push(run);
-    }
+    // smallpt before and after ptui's series, so the machine's drift shows in its two runs.
+    let run_baseline = |baseline: &mut Vec<_>| -> anyhow::Result<()> {
+        if let Some(bin) = smallpt {
+            let run = super::smallpt::run(bin, seconds, &reference)?;
+            println!("{}", baseline_row(&run));
+            baseline.push(run);
+        }
+        Ok(())
+    };
+    run_baseline(&mut baseline)?;
     println!(
         "{WIDTH}x{HEIGHT}, {THREADS} threads, errors at {seconds} s of render time; rays = \
          closest-hit queries; RMSE against {}",
@@ -70,11 +75,7 @@ pub fn run(seconds: f64, reference_path: &Path, smallpt: Option<&Path>) -> anyho
     );
     println!("{}", table_header());
     let bench = measure(seconds, &reference, |row| println!("{}", table_row(row)))?;
-    if let Some(bin) = smallpt {
-        let run = super::smallpt::run(bin, seconds, &reference)?;
-        println!("{}", baseline_row(&run));
-        baseline.push(run);
-    }
+    run_baseline(&mut baseline)?;
     print!("{}", ratios(&bench));
     if !baseline.is_empty() {
         print!("{}", targets(&bench, &baseline));
