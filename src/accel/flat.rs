@@ -1,7 +1,7 @@
 //! Brute-force closest hit: the reference the BVH is tested against, and the fastest choice for
 //! scenes with few primitives.
 
-use super::lanes::SphereLanes;
+use super::lanes::{RayBatch, SphereLanes};
 use crate::geometry::Hit;
 use crate::math::Ray;
 use crate::scene::Primitive;
@@ -61,10 +61,36 @@ impl FlatScan {
     /// which primitive it is).
     #[inline]
     pub fn closest(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<(f64, u32)> {
-        let (mut best, mut best_index) = self
+        let sphere = self
             .spheres
             .intersect(ray, t_max)
             .unwrap_or((t_max, u32::MAX));
+        self.closest_other(prims, ray, sphere)
+    }
+
+    /// [`FlatScan::closest`] for every ray of `batch`, into `batch.t` and `batch.prim`: the
+    /// spheres eight rays at a time, then the other shapes ray by ray.
+    pub fn closest_batch(&self, prims: &[Primitive], batch: &mut RayBatch) {
+        self.spheres.closest_batch(batch);
+        if self.others.is_empty() {
+            return;
+        }
+        for i in 0..batch.len() {
+            let found = self.closest_other(prims, &batch.ray(i), (batch.t[i], batch.prim[i]));
+            (batch.t[i], batch.prim[i]) = found.unwrap_or((batch.t_max(i), u32::MAX));
+        }
+    }
+
+    /// The closest of the sphere hit `sphere` ((t_max, u32::MAX) for none) and the other
+    /// shapes' hits.
+    #[inline]
+    fn closest_other(
+        &self,
+        prims: &[Primitive],
+        ray: &Ray,
+        sphere: (f64, u32),
+    ) -> Option<(f64, u32)> {
+        let (mut best, mut best_index) = sphere;
         for &i in &self.others {
             // Allow t == best so an equal-distance hit of a lower index wins.
             if let Some(t) = prims[i as usize].shape.intersect(ray, best.next_up()) {

@@ -30,6 +30,108 @@ pub struct SphereLanes {
     /// their indices are above every grouped sphere's, so testing them last keeps the
     /// lowest-index-wins order of ties.
     tail: Vec<(crate::geometry::Sphere, u32)>,
+    /// Every sphere once, in index order, for [`SphereLanes::closest_batch`], which runs the
+    /// lanes across rays instead of across spheres.
+    flat: Vec<FlatSphere>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct FlatSphere {
+    cx: f64,
+    cy: f64,
+    cz: f64,
+    r2: f64,
+    prim: u64,
+}
+
+/// Rays in structure-of-arrays form for [`SphereLanes::closest_batch`], padded to whole groups
+/// of [`LANES`]; the closest hits are written back beside them. Reused from batch to batch, so a
+/// render allocates it once per band of rows.
+#[derive(Clone, Debug, Default)]
+pub struct RayBatch {
+    ox: Vec<f64>,
+    oy: Vec<f64>,
+    oz: Vec<f64>,
+    dx: Vec<f64>,
+    dy: Vec<f64>,
+    dz: Vec<f64>,
+    /// How far each ray looks.
+    t_max: Vec<f64>,
+    len: usize,
+    /// Distance to the closest hit of each ray (t_max when none).
+    pub t: Vec<f64>,
+    /// Primitive of the closest hit (u32::MAX when none).
+    pub prim: Vec<u32>,
+}
+
+impl RayBatch {
+    pub fn clear(&mut self) {
+        for v in [
+            &mut self.ox,
+            &mut self.oy,
+            &mut self.oz,
+            &mut self.dx,
+            &mut self.dy,
+            &mut self.dz,
+            &mut self.t_max,
+        ] {
+            v.clear();
+        }
+        self.len = 0;
+    }
+
+    /// Add `ray`, looking for hits in (0, t_max).
+    pub fn push(&mut self, ray: &Ray, t_max: f64) {
+        self.t_max.push(t_max);
+        self.ox.push(ray.o.x);
+        self.oy.push(ray.o.y);
+        self.oz.push(ray.o.z);
+        self.dx.push(ray.d.x);
+        self.dy.push(ray.d.y);
+        self.dz.push(ray.d.z);
+        self.len += 1;
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub fn ray(&self, i: usize) -> Ray {
+        Ray::new(
+            crate::math::DVec3::new(self.ox[i], self.oy[i], self.oz[i]),
+            crate::math::DVec3::new(self.dx[i], self.dy[i], self.dz[i]),
+        )
+    }
+
+    /// How far ray `i` looks.
+    pub fn t_max(&self, i: usize) -> f64 {
+        self.t_max[i]
+    }
+
+    /// Pad the rays to a whole number of groups (the padding rays' answers are never read) and
+    /// size the outputs, every ray starting with no hit before its `t_max`.
+    fn prepare(&mut self) {
+        let padded = self.len.div_ceil(LANES) * LANES;
+        for v in [
+            &mut self.ox,
+            &mut self.oy,
+            &mut self.oz,
+            &mut self.dx,
+            &mut self.dy,
+            &mut self.dz,
+        ] {
+            v.resize(padded, 0.0);
+        }
+        self.t.clear();
+        self.t.extend_from_slice(&self.t_max);
+        self.t.resize(padded, 0.0);
+        self.prim.clear();
+        self.prim.resize(padded, u32::MAX);
+    }
 }
 
 impl SphereLanes {
@@ -52,6 +154,16 @@ impl SphereLanes {
         };
         let (grouped, tail) = spheres.split_at(spheres.len() - tail_len);
         s.tail = tail.iter().map(|(i, sp)| (*sp, *i)).collect();
+        s.flat = spheres
+            .iter()
+            .map(|(i, sp)| FlatSphere {
+                cx: sp.center.x,
+                cy: sp.center.y,
+                cz: sp.center.z,
+                r2: sp.radius * sp.radius,
+                prim: *i as u64,
+            })
+            .collect();
         for chunk in grouped.chunks(LANES) {
             let mut cx = [f64::INFINITY; LANES];
             let mut cy = [f64::INFINITY; LANES];
@@ -156,6 +268,84 @@ impl SphereLanes {
     }
 }
 
+impl SphereLanes {
+    /// The closest sphere hit in (0, its t_max) of every ray of `batch`, into `batch.t` and
+    /// `batch.prim`: the answer of [`SphereLanes::intersect`] for each ray, bit for bit (same
+    /// arithmetic; spheres in index order with a strict `<`, so ties go to the lowest index),
+    /// but with the lanes across eight rays, which share no dependency chain, and one sphere at
+    /// a time: no horizontal minimum, no padding spheres.
+    pub fn closest_batch(&self, batch: &mut RayBatch) {
+        batch.prepare();
+        #[cfg(target_arch = "x86_64")]
+        if self.avx512 {
+            // SAFETY: `avx512` is only set when the running CPU reports AVX-512F.
+            return unsafe { self.closest_batch_avx512(batch) };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is only set when the running CPU reports AVX2.
+            return unsafe { self.closest_batch_avx2(batch) };
+        }
+        self.closest_batch_portable(batch)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn closest_batch_avx512(&self, batch: &mut RayBatch) {
+        self.closest_batch_portable(batch)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn closest_batch_avx2(&self, batch: &mut RayBatch) {
+        self.closest_batch_portable(batch)
+    }
+
+    #[inline(always)]
+    fn closest_batch_portable(&self, batch: &mut RayBatch) {
+        let b = batch;
+        let groups =
+            b.ox.chunks_exact(LANES)
+                .zip(b.oy.chunks_exact(LANES))
+                .zip(b.oz.chunks_exact(LANES))
+                .zip(b.dx.chunks_exact(LANES))
+                .zip(b.dy.chunks_exact(LANES))
+                .zip(b.dz.chunks_exact(LANES))
+                .zip(b.t.chunks_exact_mut(LANES))
+                .zip(b.prim.chunks_exact_mut(LANES));
+        for (((((((ox, oy), oz), dx), dy), dz), t_out), prim_out) in groups {
+            let mut best = [0.0; LANES];
+            best.copy_from_slice(t_out);
+            let mut best_prim = [u64::MAX; LANES];
+            for s in &self.flat {
+                for k in 0..LANES {
+                    let fx = ox[k] - s.cx;
+                    let fy = oy[k] - s.cy;
+                    let fz = oz[k] - s.cz;
+                    let b = fx * dx[k] + fy * dy[k] + fz * dz[k];
+                    let lx = fx - dx[k] * b;
+                    let ly = fy - dy[k] * b;
+                    let lz = fz - dz[k] * b;
+                    let disc = s.r2 - (lx * lx + ly * ly + lz * lz);
+                    let c = (fx * fx + fy * fy + fz * fz) - s.r2;
+                    let q = -b - disc.max(0.0).sqrt().copysign(b);
+                    let t0 = c / q;
+                    let lo = t0.min(q);
+                    let hi = t0.max(q);
+                    let root = if lo > 0.0 { lo } else { hi };
+                    let closer = disc >= 0.0 && root > 0.0 && root < best[k];
+                    best[k] = if closer { root } else { best[k] };
+                    best_prim[k] = if closer { s.prim } else { best_prim[k] };
+                }
+            }
+            t_out.copy_from_slice(&best);
+            for (out, p) in prim_out.iter_mut().zip(best_prim) {
+                *out = p as u32;
+            }
+        }
+    }
+}
+
 fn has_avx512() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
@@ -211,6 +401,48 @@ mod tests {
         }
         let lanes = SphereLanes::new(&prims);
         assert_eq!(lanes.len_groups(), 11usize.div_ceil(LANES));
+        // Batches of every length around the group size, each ray with its own t_max.
+        let mut batch = RayBatch::default();
+        for len in [0, 1, 7, 8, 9, 17, 300] {
+            batch.clear();
+            let rays: Vec<(Ray, f64)> = (0..len)
+                .map(|_| {
+                    let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 12.0;
+                    let d = warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
+                    let t_max = if rng.next_f64() < 0.3 {
+                        rng.next_f64() * 6.0
+                    } else {
+                        f64::INFINITY
+                    };
+                    (Ray::new(o - 6.0, d), t_max)
+                })
+                .collect();
+            for (ray, t_max) in &rays {
+                batch.push(ray, *t_max);
+            }
+            lanes.closest_batch(&mut batch);
+            assert_eq!(batch.len(), len);
+            for (i, (ray, t_max)) in rays.iter().enumerate() {
+                let scalar = crate::accel::flat::intersect(&prims, ray, *t_max);
+                let want = scalar.map_or((*t_max, u32::MAX), |h| (h.t, h.prim));
+                assert_eq!(
+                    (batch.t[i].to_bits(), batch.prim[i]),
+                    (want.0.to_bits(), want.1)
+                );
+                assert_eq!(batch.ray(i).o, ray.o);
+            }
+            #[cfg(target_arch = "x86_64")]
+            if has_avx2() {
+                let (t, prim) = (batch.t.clone(), batch.prim.clone());
+                batch.prepare();
+                // SAFETY: checked just above.
+                unsafe { lanes.closest_batch_avx2(&mut batch) };
+                assert_eq!((&t, &prim), (&batch.t, &batch.prim));
+                batch.prepare();
+                lanes.closest_batch_portable(&mut batch);
+                assert_eq!((&t, &prim), (&batch.t, &batch.prim));
+            }
+        }
         // 9 spheres: one group of eight and one tested alone.
         let nine = SphereLanes::new(&prims[..9]);
         assert_eq!((nine.len_groups(), nine.tail.len()), (1, 1));

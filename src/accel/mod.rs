@@ -112,6 +112,25 @@ impl Accel {
         }
     }
 
+    /// The closest hit in (0, t_max) of every ray of `batch` (each ray has its own t_max), into
+    /// `batch.t` and `batch.prim` (t_max and u32::MAX for none): the answers of
+    /// [`Accel::closest_prim`], ray for ray.
+    pub fn closest_batch(&self, prims: &[Primitive], batch: &mut lanes::RayBatch) {
+        match self {
+            Accel::Flat(f) => f.closest_batch(prims, batch),
+            Accel::Bvh(b) => {
+                batch.t.clear();
+                batch.prim.clear();
+                for i in 0..batch.len() {
+                    let t_max = batch.t_max(i);
+                    let hit = b.intersect(prims, &batch.ray(i), t_max);
+                    batch.t.push(hit.map_or(t_max, |h| h.t));
+                    batch.prim.push(hit.map_or(u32::MAX, |h| h.prim));
+                }
+            }
+        }
+    }
+
     /// Whether anything is hit in (0, t_max).
     #[inline]
     pub fn any_hit(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> bool {

@@ -7,6 +7,7 @@ pub mod error;
 pub mod load;
 pub mod mesh;
 
+use crate::accel::lanes::RayBatch;
 use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Hit, Sphere, Triangle};
@@ -105,6 +106,20 @@ impl Scene {
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
         self.accel.intersect(&self.prims, ray, t_max)
+    }
+
+    /// The closest hit of every ray of `batch` within its t_max (t and primitive, u32::MAX for
+    /// none); the hit record of one is [`Scene::hit_at`]. The same answers as
+    /// [`Scene::intersect`].
+    #[inline]
+    pub fn intersect_batch(&self, batch: &mut RayBatch) {
+        self.accel.closest_batch(&self.prims, batch)
+    }
+
+    /// The hit record of `ray` hitting primitive `prim` at distance `t`.
+    #[inline]
+    pub fn hit_at(&self, ray: &Ray, t: f64, prim: u32) -> Hit {
+        self.prims[prim as usize].shape.hit(ray, t, prim)
     }
 
     /// Index of the first primitive along `ray` (shadow rays: is it the sampled light?).
