@@ -1,41 +1,129 @@
 //! smallpt's estimator: follow BSDF samples, add emission wherever a path hits it. Kept as the
 //! baseline that shows what next-event estimation and MIS buy.
+//!
+//! Two drivers share one bounce ([`NaivePath::bounce`]): [`radiance`] follows one path to its
+//! end, [`Stream`] follows a row's paths side by side, asking the accelerator for all their
+//! closest hits at once ([`Scene::intersect_batch`], spheres tested across eight rays per
+//! vector). Same numbers in the same order per path, so the same image bit for bit.
 
 use super::{russian_roulette, RR_START_DEPTH};
-use crate::geometry::spawn_origin;
+use crate::accel::lanes::RayBatch;
+use crate::geometry::{spawn_origin, Hit};
 use crate::math::{DVec3, Ray};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
-pub fn radiance(scene: &Scene, mut ray: Ray, sampler: &mut Sampler, max_depth: u32) -> DVec3 {
-    let mut l = DVec3::ZERO;
-    let mut beta = DVec3::ONE;
-    let mut depth = 0u32;
+pub fn radiance(scene: &Scene, ray: Ray, sampler: &mut Sampler, max_depth: u32) -> DVec3 {
+    let mut path = NaivePath::new(ray);
     loop {
         sampler.count_ray();
-        let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
-            l += beta * scene.background;
-            break;
-        };
-        let material = scene.material(&hit);
-        l += beta * material.emission;
-        if depth >= max_depth {
-            break;
+        let hit = scene.intersect(&path.ray, f64::INFINITY);
+        if !path.bounce(scene, hit.as_ref(), sampler, max_depth) {
+            return path.l;
         }
-        let wo = -ray.d;
+    }
+}
+
+/// One path's state between closest-hit queries.
+#[derive(Clone, Copy, Debug)]
+struct NaivePath {
+    ray: Ray,
+    l: DVec3,
+    beta: DVec3,
+    depth: u32,
+}
+
+impl NaivePath {
+    fn new(ray: Ray) -> Self {
+        NaivePath {
+            ray,
+            l: DVec3::ZERO,
+            beta: DVec3::ONE,
+            depth: 0,
+        }
+    }
+
+    /// Take in what `ray` hit and choose the next ray; false when the path has ended.
+    #[inline]
+    fn bounce(
+        &mut self,
+        scene: &Scene,
+        hit: Option<&Hit>,
+        sampler: &mut Sampler,
+        max_depth: u32,
+    ) -> bool {
+        let Some(hit) = hit else {
+            self.l += self.beta * scene.background;
+            return false;
+        };
+        let material = scene.material(hit);
+        self.l += self.beta * material.emission;
+        if self.depth >= max_depth {
+            return false;
+        }
+        let wo = -self.ray.d;
         let (uses_lobe, uses_dir) = material.sample_uses();
         let u_lobe = sampler.get_1d_if(uses_lobe);
         let u = sampler.get_2d_if(uses_dir);
         let Some(bs) = material.sample(wo, hit.n, u_lobe, u) else {
-            break;
+            return false;
         };
-        beta *= bs.weight;
-        depth += 1;
-        let u_rr = sampler.get_1d_if(depth >= RR_START_DEPTH);
-        if !russian_roulette(&mut beta, depth, u_rr) {
-            break;
+        self.beta *= bs.weight;
+        self.depth += 1;
+        let u_rr = sampler.get_1d_if(self.depth >= RR_START_DEPTH);
+        if !russian_roulette(&mut self.beta, self.depth, u_rr) {
+            return false;
         }
-        ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
+        self.ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
+        true
     }
-    l
+}
+
+/// Scratch space to trace many camera samples side by side; keep one per thread and reuse it.
+#[derive(Default)]
+pub struct Stream {
+    paths: Vec<(NaivePath, Sampler)>,
+    active: Vec<u32>,
+    next: Vec<u32>,
+    batch: RayBatch,
+}
+
+impl Stream {
+    /// Trace every camera sample of `samples` (its ray and sampler) to its end; returns each
+    /// one's radiance and closest-hit query count, in order, in `out`.
+    pub fn radiance(
+        &mut self,
+        scene: &Scene,
+        samples: impl Iterator<Item = (Ray, Sampler)>,
+        max_depth: u32,
+        out: &mut Vec<(DVec3, u32)>,
+    ) {
+        self.paths.clear();
+        self.paths
+            .extend(samples.map(|(ray, sampler)| (NaivePath::new(ray), sampler)));
+        self.active.clear();
+        self.active.extend(0..self.paths.len() as u32);
+        while !self.active.is_empty() {
+            self.batch.clear();
+            for &i in &self.active {
+                let (path, sampler) = &mut self.paths[i as usize];
+                sampler.count_ray();
+                self.batch.push(&path.ray, f64::INFINITY);
+            }
+            scene.intersect_batch(&mut self.batch);
+            self.next.clear();
+            for (j, &i) in self.active.iter().enumerate() {
+                let (path, sampler) = &mut self.paths[i as usize];
+                let prim = self.batch.prim[j];
+                let hit =
+                    (prim != u32::MAX).then(|| scene.hit_at(&path.ray, self.batch.t[j], prim));
+                if path.bounce(scene, hit.as_ref(), sampler, max_depth) {
+                    self.next.push(i);
+                }
+            }
+            std::mem::swap(&mut self.active, &mut self.next);
+        }
+        out.clear();
+        out.extend(self.paths.iter().map(|(p, s)| (p.l, s.rays())));
+    }
 }

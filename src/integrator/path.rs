@@ -9,6 +9,7 @@
 
 use super::caustics::{connection_ratio, CausticPass};
 use super::{russian_roulette, RR_START_DEPTH};
+use crate::accel::lanes::RayBatch;
 use crate::geometry::{spawn_origin, Hit};
 use crate::light::LightSample;
 use crate::material::Material;
@@ -22,49 +23,136 @@ use crate::scene::{Primitive, Scene};
 /// Caustics seen after a bounce (x -> y -> specular chain -> light, x and y non-delta) are shared
 /// by MIS: every non-delta vertex x connects to one of the pass's caustic vertices y, and the
 /// camera path that finds the light from y through the chain is weighted against that.
+///
+/// Two drivers share one vertex ([`PathState::vertex`]): this one follows one path to its end,
+/// [`Stream`] follows a row's paths side by side and asks the accelerator for all their rays
+/// (continuations and shadow rays) at once. Each path draws the same numbers and adds the same
+/// terms in the same order either way, so the image is the same bit for bit.
 pub fn radiance(
     scene: &Scene,
-    mut ray: Ray,
+    ray: Ray,
     sampler: &mut Sampler,
     max_depth: u32,
     caustics: Option<CausticPass>,
 ) -> DVec3 {
-    let mut l = DVec3::ZERO;
-    let mut beta = DVec3::ONE;
-    let mut depth = 0u32;
-    // Whether the previous bounce was a delta lobe (the camera counts as one).
-    let mut specular = true;
-    let mut prev_p = ray.o;
-    let mut prev_side = ray.o;
-    let mut prev_pdf_bsdf = 0.0;
-    let nee = scene.has_lights();
-    // Whether the last non-delta vertex was the first hit (a caustic end the tracer covers),
-    // and the delta bounces since.
-    let mut caustic_end = false;
-    let mut delta_run = 0u32;
-    // At a non-delta vertex y reached straight from a non-delta x: x's BSDF pdf times cos_y / d^2
-    // and, once y's bounce is sampled, times y's BSDF pdf; kept through the specular chain after
-    // y to weigh a light found at its end against the connection strategy.
-    let mut chain_pdf: Option<f64> = None;
-    let connect = caustics.filter(|c| !c.vertices.is_empty() && c.light_paths > 0);
+    let mut path = PathState::new(ray);
     loop {
         sampler.count_ray();
-        let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
-            l += beta * scene.background;
-            break;
+        let hit = scene.intersect(&path.ray, f64::INFINITY);
+        let (shadows, go_on) = path.vertex(scene, hit.as_ref(), sampler, max_depth, caustics);
+        if let Some(s) = shadows.light {
+            sampler.count_ray();
+            if scene.first_prim(&s.ray) == Some(s.light) {
+                path.l += s.value;
+            }
+        }
+        if let Some(s) = shadows.join {
+            sampler.count_ray();
+            if scene.intersect(&s.ray, s.len).is_none() {
+                path.l += s.value;
+            }
+        }
+        if !go_on {
+            return path.l;
+        }
+    }
+}
+
+/// A light sample's shadow ray: `value` counts if the first thing along `ray` is `light`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LightShadow {
+    pub ray: Ray,
+    pub light: u32,
+    pub value: DVec3,
+}
+
+/// A caustic join's shadow ray: `value` counts if nothing is hit within `len` along `ray`.
+#[derive(Clone, Copy, Debug)]
+struct JoinShadow {
+    ray: Ray,
+    len: f64,
+    value: DVec3,
+}
+
+/// The shadow rays one vertex asks for; their values already carry the path throughput and
+/// are added, in this order, before the next vertex's terms.
+#[derive(Clone, Copy, Debug, Default)]
+struct Shadows {
+    light: Option<LightShadow>,
+    join: Option<JoinShadow>,
+}
+
+/// One camera path's state between rays.
+#[derive(Clone, Copy, Debug)]
+struct PathState {
+    /// The ray to follow next.
+    ray: Ray,
+    l: DVec3,
+    beta: DVec3,
+    depth: u32,
+    /// Whether the previous bounce was a delta lobe (the camera counts as one).
+    specular: bool,
+    prev_p: DVec3,
+    prev_side: DVec3,
+    prev_pdf_bsdf: f64,
+    /// Whether the last non-delta vertex was the first hit (a caustic end the tracer covers),
+    /// and the delta bounces since.
+    caustic_end: bool,
+    delta_run: u32,
+    /// At a non-delta vertex y reached straight from a non-delta x: x's BSDF pdf times
+    /// cos_y / d^2 and, once y's bounce is sampled, times y's BSDF pdf; kept through the
+    /// specular chain after y to weigh a light found at its end against the connection strategy.
+    chain_pdf: Option<f64>,
+}
+
+impl PathState {
+    fn new(ray: Ray) -> Self {
+        PathState {
+            ray,
+            l: DVec3::ZERO,
+            beta: DVec3::ONE,
+            depth: 0,
+            specular: true,
+            prev_p: ray.o,
+            prev_side: ray.o,
+            prev_pdf_bsdf: 0.0,
+            caustic_end: false,
+            delta_run: 0,
+            chain_pdf: None,
+        }
+    }
+
+    /// Take in what `self.ray` hit: emission, the shadow rays of light sampling and of the
+    /// caustic join, and the next ray. Returns the shadow rays and whether the path goes on.
+    #[inline]
+    fn vertex(
+        &mut self,
+        scene: &Scene,
+        hit: Option<&Hit>,
+        sampler: &mut Sampler,
+        max_depth: u32,
+        caustics: Option<CausticPass>,
+    ) -> (Shadows, bool) {
+        let mut shadows = Shadows::default();
+        let Some(hit) = hit else {
+            self.l += self.beta * scene.background;
+            return (shadows, false);
         };
-        let material = scene.material(&hit);
+        let ray = self.ray;
+        let nee = scene.has_lights();
+        let connect = caustics.filter(|c| !c.vertices.is_empty() && c.light_paths > 0);
+        let material = scene.material(hit);
         let prim = &scene.prims[hit.prim as usize];
 
-        let covered = delta_run > 0
+        let covered = self.delta_run > 0
             && caustics.is_some_and(|c| {
                 prim.light
                     .is_some_and(|light| c.tracer.covers(light, hit.n, ray.d))
             });
-        let traced = caustic_end && covered;
+        let traced = self.caustic_end && covered;
         if material.is_emissive() && !traced {
-            let weight = if specular || !nee {
-                match (connect, chain_pdf, prim.light) {
+            let weight = if self.specular || !nee {
+                match (connect, self.chain_pdf, prim.light) {
                     (Some(c), Some(pdf), Some(light)) if covered => {
                         let cos_z = hit.n.dot(ray.d).abs();
                         let p_light = c.tracer.light_pdf(light, hit.p, -ray.d);
@@ -73,25 +161,36 @@ pub fn radiance(
                     _ => 1.0,
                 }
             } else {
-                emission_mis_weight(scene, prim, prev_p, prev_side, prev_pdf_bsdf, ray.d, hit.p)
+                emission_mis_weight(
+                    scene,
+                    prim,
+                    self.prev_p,
+                    self.prev_side,
+                    self.prev_pdf_bsdf,
+                    ray.d,
+                    hit.p,
+                )
             };
-            l += beta * material.emission * weight;
+            self.l += self.beta * material.emission * weight;
         }
         if material.is_delta() {
-            delta_run += 1;
+            self.delta_run += 1;
         } else {
-            caustic_end = depth == 0;
-            delta_run = 0;
-            chain_pdf =
-                (!specular).then(|| prev_pdf_bsdf * hit.n.dot(ray.d).abs() / (hit.t * hit.t));
+            self.caustic_end = self.depth == 0;
+            self.delta_run = 0;
+            self.chain_pdf = (!self.specular)
+                .then(|| self.prev_pdf_bsdf * hit.n.dot(ray.d).abs() / (hit.t * hit.t));
         }
-        if depth >= max_depth {
-            break;
+        if self.depth >= max_depth {
+            return (shadows, false);
         }
         let wo = -ray.d;
 
         if nee && !material.is_delta() {
-            l += beta * direct_light(scene, &hit, wo, material, sampler, true);
+            shadows.light = light_shadow(scene, hit, wo, material, sampler, true).map(|mut s| {
+                s.value = self.beta * s.value;
+                s
+            });
         } else if nee {
             // Keep the dimension count per bounce fixed so samplers stay aligned.
             sampler.get_1d_if(false);
@@ -102,11 +201,11 @@ pub fn radiance(
             let here = !material.is_delta();
             let u_c = sampler.get_1d_if(here);
             if here {
-                let (v, traced) = connect_caustic(scene, &hit, wo, material, &c, u_c, beta);
-                if traced {
-                    sampler.count_ray();
-                }
-                l += beta * v;
+                shadows.join =
+                    connect_caustic(scene, hit, wo, material, &c, u_c, self.beta).map(|mut s| {
+                        s.value = self.beta * s.value;
+                        s
+                    });
             }
         }
 
@@ -114,10 +213,10 @@ pub fn radiance(
         let u_lobe = sampler.get_1d_if(uses_lobe);
         let u = sampler.get_2d_if(uses_dir);
         let Some(bs) = material.sample(wo, hit.n, u_lobe, u) else {
-            break;
+            return (shadows, false);
         };
-        beta *= bs.weight;
-        chain_pdf = chain_pdf.map(|p| {
+        self.beta *= bs.weight;
+        self.chain_pdf = self.chain_pdf.map(|p| {
             let (cos_in, cos_out) = (hit.n.dot(wo).abs(), hit.n.dot(bs.wi).abs());
             if material.is_delta() {
                 p * cos_in / cos_out
@@ -125,23 +224,105 @@ pub fn radiance(
                 p * bs.pdf / cos_out
             }
         });
-        specular = bs.delta;
-        prev_pdf_bsdf = bs.pdf;
-        prev_p = hit.p;
-        prev_side = spawn_origin(hit.p, hit.n, hit.err, wo);
-        depth += 1;
-        let u_rr = sampler.get_1d_if(depth >= RR_START_DEPTH);
-        if !russian_roulette(&mut beta, depth, u_rr) {
-            break;
+        self.specular = bs.delta;
+        self.prev_pdf_bsdf = bs.pdf;
+        self.prev_p = hit.p;
+        self.prev_side = spawn_origin(hit.p, hit.n, hit.err, wo);
+        self.depth += 1;
+        let u_rr = sampler.get_1d_if(self.depth >= RR_START_DEPTH);
+        if !russian_roulette(&mut self.beta, self.depth, u_rr) {
+            return (shadows, false);
         }
-        ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
+        self.ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
+        (shadows, true)
     }
-    l
+}
+
+/// Scratch space to trace many camera samples side by side; keep one per thread and reuse it.
+#[derive(Default)]
+pub struct Stream {
+    paths: Vec<(PathState, Sampler, Shadows, bool)>,
+    active: Vec<u32>,
+    next: Vec<u32>,
+    batch: RayBatch,
+}
+
+impl Stream {
+    /// Trace every camera sample of `samples` (its ray and sampler) to its end; returns each
+    /// one's radiance and closest-hit query count, in order, in `out`. Each round asks the
+    /// accelerator at once for every live path's shadow rays from its last vertex and its
+    /// next ray.
+    pub fn radiance(
+        &mut self,
+        scene: &Scene,
+        samples: impl Iterator<Item = (Ray, Sampler)>,
+        max_depth: u32,
+        caustics: Option<CausticPass>,
+        out: &mut Vec<(DVec3, u32)>,
+    ) {
+        self.paths.clear();
+        self.paths.extend(
+            samples.map(|(ray, sampler)| (PathState::new(ray), sampler, Shadows::default(), true)),
+        );
+        self.active.clear();
+        self.active.extend(0..self.paths.len() as u32);
+        while !self.active.is_empty() {
+            self.batch.clear();
+            for &i in &self.active {
+                let (path, sampler, shadows, go_on) = &mut self.paths[i as usize];
+                if let Some(s) = &shadows.light {
+                    sampler.count_ray();
+                    self.batch.push(&s.ray, f64::INFINITY);
+                }
+                if let Some(s) = &shadows.join {
+                    sampler.count_ray();
+                    self.batch.push(&s.ray, s.len);
+                }
+                if *go_on {
+                    sampler.count_ray();
+                    self.batch.push(&path.ray, f64::INFINITY);
+                }
+            }
+            scene.intersect_batch(&mut self.batch);
+            self.next.clear();
+            let mut j = 0;
+            for &i in &self.active {
+                let (path, sampler, shadows, go_on) = &mut self.paths[i as usize];
+                if let Some(s) = shadows.light {
+                    if self.batch.prim[j] == s.light {
+                        path.l += s.value;
+                    }
+                    j += 1;
+                }
+                if let Some(s) = shadows.join {
+                    if self.batch.prim[j] == u32::MAX {
+                        path.l += s.value;
+                    }
+                    j += 1;
+                }
+                if !*go_on {
+                    continue;
+                }
+                let prim = self.batch.prim[j];
+                let hit =
+                    (prim != u32::MAX).then(|| scene.hit_at(&path.ray, self.batch.t[j], prim));
+                j += 1;
+                (*shadows, *go_on) = path.vertex(scene, hit.as_ref(), sampler, max_depth, caustics);
+                if *go_on || shadows.light.is_some() || shadows.join.is_some() {
+                    self.next.push(i);
+                }
+            }
+            std::mem::swap(&mut self.active, &mut self.next);
+        }
+        out.clear();
+        out.extend(self.paths.iter().map(|(p, s, _, _)| (p.l, s.rays())));
+    }
 }
 
 /// Join the non-delta camera vertex `hit` to one of the pass's caustic vertices, chosen by `u`:
 /// f_x G f_y times the light path's weight, over the chance of that light path among the pass's,
 /// weighted by the power heuristic against the camera path that would reach the light from y.
+/// Returns the shadow ray to trace (without the path throughput), if the join is worth one.
 #[inline]
 fn connect_caustic(
     scene: &Scene,
@@ -151,7 +332,7 @@ fn connect_caustic(
     c: &CausticPass,
     u: f64,
     beta: DVec3,
-) -> (DVec3, bool) {
+) -> Option<JoinShadow> {
     let m = c.vertices.len();
     let k = ((u * m as f64) as usize).min(m - 1);
     // What is left of u once it has chosen k is uniform again: the roulette's number.
@@ -161,18 +342,18 @@ fn connect_caustic(
     let d2 = to.length_squared();
     let d = d2.sqrt();
     if !(d > 0.0 && d.is_finite()) {
-        return (DVec3::ZERO, false);
+        return None;
     }
     let dir = to / d;
     let e_x = material.eval(wo, dir, hit.n);
     if e_x.f_cos.max_element() <= 0.0 {
-        return (DVec3::ZERO, false);
+        return None;
     }
     let my = &scene.materials[v.material as usize];
     let (n_y, wo_y) = (v.normal(), v.wo());
     let e_y = my.eval(wo_y, -dir, n_y);
     if e_y.f_cos.max_element() <= 0.0 {
-        return (DVec3::ZERO, false);
+        return None;
     }
     let pdf_y = my.eval(-dir, wo_y, n_y).pdf;
     let g_xy = n_y.dot(dir).abs() / d2;
@@ -180,7 +361,7 @@ fn connect_caustic(
     let r = connection_ratio(v.p_light as f64, e_x.pdf * g_xy * pdf_y / cos_y_in);
     let w = power_heuristic(r, 1.0);
     if w.is_nan() || w <= 0.0 {
-        return (DVec3::ZERO, false);
+        return None;
     }
     let share = m as f64 / c.light_paths as f64;
     let mut value = e_x.f_cos * e_y.f_cos * v.alpha() * (w * share / d2);
@@ -189,21 +370,21 @@ fn connect_caustic(
     let worth = max_component(beta * value);
     let q = (worth / c.tracer.connect_threshold).min(1.0);
     if q.is_nan() || q <= 0.0 || u_rr >= q {
-        return (DVec3::ZERO, false);
+        return None;
     }
     value /= q;
     let o = spawn_origin(hit.p, hit.n, hit.err, dir);
     let end = spawn_origin(v.p, n_y, v.err as f64, -dir);
     let seg = end - o;
     let len = seg.length();
-    if len.is_nan() || len <= 0.0 || scene.intersect(&Ray::new(o, seg / len), len).is_some() {
-        return (DVec3::ZERO, true);
+    if len.is_nan() || len <= 0.0 || !value.is_finite() {
+        return None;
     }
-    if value.is_finite() {
-        (value, true)
-    } else {
-        (DVec3::ZERO, true)
-    }
+    Some(JoinShadow {
+        ray: Ray::new(o, seg / len),
+        len,
+        value,
+    })
 }
 
 /// MIS weight of emission found by BSDF sampling from `prev_p` (pdf `prev_pdf_bsdf`; `prev_side`
@@ -242,30 +423,47 @@ pub(crate) fn direct_light(
     sampler: &mut Sampler,
     mis: bool,
 ) -> DVec3 {
+    let Some(s) = light_shadow(scene, hit, wo, material, sampler, mis) else {
+        return DVec3::ZERO;
+    };
+    sampler.count_ray();
+    if scene.first_prim(&s.ray) == Some(s.light) {
+        s.value
+    } else {
+        DVec3::ZERO
+    }
+}
+
+/// [`direct_light`] up to its shadow ray: the ray, and the value if it reaches the light.
+#[inline]
+pub(crate) fn light_shadow(
+    scene: &Scene,
+    hit: &Hit,
+    wo: DVec3,
+    material: &Material,
+    sampler: &mut Sampler,
+    mis: bool,
+) -> Option<LightShadow> {
     let u_light = sampler.get_1d();
     let u = sampler.get_2d();
     let side = spawn_origin(hit.p, hit.n, hit.err, wo);
-    let Some(ls) = scene.lights.sample(hit.p, side, u_light, u) else {
-        return DVec3::ZERO;
-    };
+    let ls = scene.lights.sample(hit.p, side, u_light, u)?;
     let e = material.eval(wo, ls.wi, hit.n);
     if e.f_cos.max_element() <= 0.0 || ls.pdf <= 0.0 {
-        return DVec3::ZERO;
+        return None;
     }
     // Visible if the first thing along the shadow ray is the sampled light itself: no distance
     // tolerance, so light cannot leak where a light sphere grazes a wall (smallpt's ceiling).
-    let shadow = shadow_ray(scene, hit, &ls);
-    sampler.count_ray();
-    let visible = scene.first_prim(&shadow) == Some(ls.prim);
-    if !visible {
-        return DVec3::ZERO;
-    }
     let w = if mis {
         power_heuristic(ls.pdf, e.pdf)
     } else {
         1.0
     };
-    e.f_cos * ls.le * (w / ls.pdf)
+    Some(LightShadow {
+        ray: shadow_ray(scene, hit, &ls),
+        light: ls.prim,
+        value: e.f_cos * ls.le * (w / ls.pdf),
+    })
 }
 
 /// The shadow ray of a light sample: from the offset origin towards the point on the light that
