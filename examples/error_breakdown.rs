@@ -52,6 +52,25 @@ fn main() -> anyhow::Result<()> {
             px(&rf.data)
         );
     }
+    // Where the error sits: the 32x24 blocks carrying the most of it.
+    let (bw, bh) = (32, 24);
+    let mut blocks = std::collections::HashMap::<(u32, u32), f64>::new();
+    for &(s, i) in &se {
+        let (x, y) = (i as u32 % img.width, i as u32 / img.width);
+        *blocks.entry((x / bw, y / bh)).or_default() += s;
+    }
+    let mut blocks: Vec<_> = blocks.into_iter().collect();
+    blocks.sort_by(|a, b| b.1.total_cmp(&a.1));
+    for ((bx, by), s) in blocks.iter().take(8) {
+        println!(
+            "block x {}-{}, y {}-{}: {:.1}% of squared error",
+            bx * bw,
+            (bx + 1) * bw - 1,
+            by * bh,
+            (by + 1) * bh - 1,
+            100.0 * s / total
+        );
+    }
     if let Some(out) = args.get(3) {
         let p99 = se[n / 100].0.max(1e-12);
         let mut buf = vec![0u8; n * 3];

@@ -39,7 +39,15 @@ pub fn radiance(
     loop {
         sampler.count_ray();
         let hit = scene.intersect(&path.ray, f64::INFINITY);
-        let (shadows, go_on) = path.vertex(scene, hit.as_ref(), sampler, max_depth, caustics);
+        let mut shadows = Shadows::default();
+        let go_on = path.vertex(
+            scene,
+            hit.as_ref(),
+            sampler,
+            max_depth,
+            caustics,
+            &mut shadows,
+        );
         if let Some(s) = shadows.light {
             sampler.count_ray();
             if scene.first_prim(&s.ray) == Some(s.light) {
@@ -123,7 +131,7 @@ impl PathState {
     }
 
     /// Take in what `self.ray` hit: emission, the shadow rays of light sampling and of the
-    /// caustic join, and the next ray. Returns the shadow rays and whether the path goes on.
+    /// caustic join (into `shadows`), and the next ray. Returns whether the path goes on.
     #[inline]
     fn vertex(
         &mut self,
@@ -132,11 +140,12 @@ impl PathState {
         sampler: &mut Sampler,
         max_depth: u32,
         caustics: Option<CausticPass>,
-    ) -> (Shadows, bool) {
-        let mut shadows = Shadows::default();
+        shadows: &mut Shadows,
+    ) -> bool {
+        *shadows = Shadows::default();
         let Some(hit) = hit else {
             self.l += self.beta * scene.background;
-            return (shadows, false);
+            return false;
         };
         let ray = self.ray;
         let nee = scene.has_lights();
@@ -182,15 +191,12 @@ impl PathState {
                 .then(|| self.prev_pdf_bsdf * hit.n.dot(ray.d).abs() / (hit.t * hit.t));
         }
         if self.depth >= max_depth {
-            return (shadows, false);
+            return false;
         }
         let wo = -ray.d;
 
         if nee && !material.is_delta() {
-            shadows.light = light_shadow(scene, hit, wo, material, sampler, true).map(|mut s| {
-                s.value = self.beta * s.value;
-                s
-            });
+            shadows.light = light_shadow(scene, hit, wo, material, sampler, true, self.beta);
         } else if nee {
             // Keep the dimension count per bounce fixed so samplers stay aligned.
             sampler.get_1d_if(false);
@@ -201,11 +207,7 @@ impl PathState {
             let here = !material.is_delta();
             let u_c = sampler.get_1d_if(here);
             if here {
-                shadows.join =
-                    connect_caustic(scene, hit, wo, material, &c, u_c, self.beta).map(|mut s| {
-                        s.value = self.beta * s.value;
-                        s
-                    });
+                shadows.join = connect_caustic(scene, hit, wo, material, &c, u_c, self.beta);
             }
         }
 
@@ -213,7 +215,7 @@ impl PathState {
         let u_lobe = sampler.get_1d_if(uses_lobe);
         let u = sampler.get_2d_if(uses_dir);
         let Some(bs) = material.sample(wo, hit.n, u_lobe, u) else {
-            return (shadows, false);
+            return false;
         };
         self.beta *= bs.weight;
         self.chain_pdf = self.chain_pdf.map(|p| {
@@ -231,10 +233,10 @@ impl PathState {
         self.depth += 1;
         let u_rr = sampler.get_1d_if(self.depth >= RR_START_DEPTH);
         if !russian_roulette(&mut self.beta, self.depth, u_rr) {
-            return (shadows, false);
+            return false;
         }
         self.ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
-        (shadows, true)
+        true
     }
 }
 
@@ -307,7 +309,7 @@ impl Stream {
                 let hit =
                     (prim != u32::MAX).then(|| scene.hit_at(&path.ray, self.batch.t[j], prim));
                 j += 1;
-                (*shadows, *go_on) = path.vertex(scene, hit.as_ref(), sampler, max_depth, caustics);
+                *go_on = path.vertex(scene, hit.as_ref(), sampler, max_depth, caustics, shadows);
                 if *go_on || shadows.light.is_some() || shadows.join.is_some() {
                     self.next.push(i);
                 }
@@ -322,7 +324,8 @@ impl Stream {
 /// Join the non-delta camera vertex `hit` to one of the pass's caustic vertices, chosen by `u`:
 /// f_x G f_y times the light path's weight, over the chance of that light path among the pass's,
 /// weighted by the power heuristic against the camera path that would reach the light from y.
-/// Returns the shadow ray to trace (without the path throughput), if the join is worth one.
+/// Returns the shadow ray to trace and its value times the throughput `beta`, if the join is
+/// worth one.
 #[inline]
 fn connect_caustic(
     scene: &Scene,
@@ -383,7 +386,7 @@ fn connect_caustic(
     Some(JoinShadow {
         ray: Ray::new(o, seg / len),
         len,
-        value,
+        value: beta * value,
     })
 }
 
@@ -423,7 +426,7 @@ pub(crate) fn direct_light(
     sampler: &mut Sampler,
     mis: bool,
 ) -> DVec3 {
-    let Some(s) = light_shadow(scene, hit, wo, material, sampler, mis) else {
+    let Some(s) = light_shadow(scene, hit, wo, material, sampler, mis, DVec3::ONE) else {
         return DVec3::ZERO;
     };
     sampler.count_ray();
@@ -434,7 +437,8 @@ pub(crate) fn direct_light(
     }
 }
 
-/// [`direct_light`] up to its shadow ray: the ray, and the value if it reaches the light.
+/// [`direct_light`] up to its shadow ray: the ray, and the value if it reaches the light, times
+/// the path throughput `beta`.
 #[inline]
 pub(crate) fn light_shadow(
     scene: &Scene,
@@ -443,6 +447,7 @@ pub(crate) fn light_shadow(
     material: &Material,
     sampler: &mut Sampler,
     mis: bool,
+    beta: DVec3,
 ) -> Option<LightShadow> {
     let u_light = sampler.get_1d();
     let u = sampler.get_2d();
@@ -462,7 +467,7 @@ pub(crate) fn light_shadow(
     Some(LightShadow {
         ray: shadow_ray(scene, hit, &ls),
         light: ls.prim,
-        value: e.f_cos * ls.le * (w / ls.pdf),
+        value: beta * (e.f_cos * ls.le * (w / ls.pdf)),
     })
 }
 
