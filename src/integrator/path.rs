@@ -496,3 +496,17 @@ fn shadow_ray(scene: &Scene, hit: &Hit, ls: &LightSample) -> Ray {
     }
     Ray::new(o, wi)
 }
+
+#[cfg(test)]
+mod stream_tests {
+    use super::*;
+
+    /// The batched driver keeps one entry per pixel of a row per thread; the README's memory
+    /// account counts on it staying this small.
+    #[test]
+    fn a_stream_entry_stays_small() {
+        let size = std::mem::size_of::<(PathState, Sampler, Shadows, bool)>();
+        println!("stream entry: {size} bytes");
+        assert!(size <= 448, "{size} bytes");
+    }
+}
