@@ -1,9 +1,9 @@
 //! Flat scan against BVH, closest-hit queries on random spheres and triangles, 1 to 100k
-//! primitives (`cargo bench --bench accel`). `ptui bench accel` prints the same sweep as a table
+//! primitives, and cornell's rays one at a time against a batch (`cargo bench --bench accel`). `ptui bench accel` prints the same sweep as a table
 //! with the crossover; `accel::BVH_CROSSOVER` records the measured value.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use ptui::accel::{bench, flat::FlatScan, Bvh};
+use ptui::accel::{bench, flat::FlatScan, lanes::RayBatch, Bvh};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -42,6 +42,41 @@ fn closest_hit(c: &mut Criterion) {
     group.finish();
 }
 
+/// cornell's nine spheres, a row's worth of camera rays: one ray at a time (eight spheres per
+/// vector) against the batch (eight rays per vector, `closest_batch`), as the renderer's
+/// one-path and row-stream drivers call them.
+fn cornell_batch(c: &mut Criterion) {
+    let scene = ptui::scene::load("cornell").expect("built-in scene");
+    let rays = ptui::accel::camera_probe(&scene.camera, 32, 10);
+    let flat = FlatScan::new(&scene.prims);
+    let mut batch = RayBatch::default();
+    let mut group = c.benchmark_group("cornell_closest_hit");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    group.bench_function("one_ray_at_a_time", |b| {
+        b.iter(|| {
+            rays.iter()
+                .filter_map(|r| flat.closest(&scene.prims, r, f64::INFINITY))
+                .map(|(_, i)| i as u64)
+                .sum::<u64>()
+        })
+    });
+    group.bench_function("batch", |b| {
+        b.iter(|| {
+            batch.clear();
+            for r in &rays {
+                batch.push(r, f64::INFINITY);
+            }
+            flat.closest_batch(&scene.prims, &mut batch);
+            batch.prim.iter().map(|&i| i as u64).sum::<u64>()
+        })
+    });
+    group.finish();
+}
+
 fn build(c: &mut Criterion) {
     let mut group = c.benchmark_group("bvh_build");
     group.sample_size(10);
@@ -54,5 +89,5 @@ fn build(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, closest_hit, build);
+criterion_group!(benches, closest_hit, cornell_batch, build);
 criterion_main!(benches);

@@ -449,7 +449,8 @@ pub(crate) fn light_shadow(
     mis: bool,
     beta: DVec3,
 ) -> Option<LightShadow> {
-    let u_light = sampler.get_1d();
+    // With one light the choice of light reads no number: its dimension is passed over.
+    let u_light = sampler.get_1d_if(scene.lights.len() > 1);
     let u = sampler.get_2d();
     let side = spawn_origin(hit.p, hit.n, hit.err, wo);
     let ls = scene.lights.sample(hit.p, side, u_light, u)?;
