@@ -52,6 +52,25 @@ fn main() -> anyhow::Result<()> {
             px(&rf.data)
         );
     }
+    // REGION=x0,y0,x1,y1 (inclusive): that rectangle's share of the squared error.
+    if let Ok(region) = std::env::var("REGION") {
+        let r: Vec<u32> = region.split(',').filter_map(|v| v.parse().ok()).collect();
+        anyhow::ensure!(r.len() == 4, "REGION wants x0,y0,x1,y1");
+        let part: f64 = se
+            .iter()
+            .filter(|(_, i)| {
+                let (x, y) = (*i as u32 % img.width, *i as u32 / img.width);
+                (r[0]..=r[2]).contains(&x) && (r[1]..=r[3]).contains(&y)
+            })
+            .map(|(s, _)| s)
+            .sum();
+        let count = ((r[2] - r[0] + 1) * (r[3] - r[1] + 1)) as f64;
+        println!(
+            "region {region}: {:.1}% of squared error, its own RMSE {:.5}",
+            100.0 * part / total,
+            (part / count).sqrt()
+        );
+    }
     // Where the error sits: the 32x24 blocks carrying the most of it.
     let (bw, bh) = (32, 24);
     let mut blocks = std::collections::HashMap::<(u32, u32), f64>::new();

@@ -347,12 +347,23 @@ fn connect_caustic(
     if !(d > 0.0 && d.is_finite()) {
         return None;
     }
+    let my = &scene.materials[v.material as usize];
+    let share = m as f64 / c.light_paths as f64;
+    // Most joins lose the roulette below. Play it first against a bound on their worth (each
+    // f cos at its largest, the MIS weight 1; widened past any rounding), so those end before
+    // their directions are decoded and their BSDFs evaluated: a join this bound rejects, the
+    // exact worth rejects too, so the decisions and the image are the same.
+    let bound = max_component(beta * material.f_cos_bound() * my.f_cos_bound() * v.alpha())
+        * (share / d2)
+        * (1.0 + 1e-9);
+    if u_rr * c.tracer.connect_threshold >= bound {
+        return None;
+    }
     let dir = to / d;
     let e_x = material.eval(wo, dir, hit.n);
     if e_x.f_cos.max_element() <= 0.0 {
         return None;
     }
-    let my = &scene.materials[v.material as usize];
     let (n_y, wo_y) = (v.normal(), v.wo());
     let e_y = my.eval(wo_y, -dir, n_y);
     if e_y.f_cos.max_element() <= 0.0 {
@@ -366,7 +377,6 @@ fn connect_caustic(
     if w.is_nan() || w <= 0.0 {
         return None;
     }
-    let share = m as f64 / c.light_paths as f64;
     let mut value = e_x.f_cos * e_y.f_cos * v.alpha() * (w * share / d2);
     // Roulette on the shadow ray: a connection worth little to the pixel is traced with
     // probability in proportion to its worth and divided by it (still unbiased).
