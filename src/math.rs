@@ -22,7 +22,7 @@ impl Ray {
 }
 
 /// An orthonormal frame whose local z axis is the normal `n`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
     pub s: DVec3,
     pub t: DVec3,

@@ -102,6 +102,8 @@ struct Cap {
     h: f64,
     rim_centre: DVec3,
     rim2: f64,
+    /// `Frame::from_normal(axis)`, built once: area samples of the cap start from it.
+    frame: Frame,
 }
 
 impl Cap {
@@ -113,6 +115,7 @@ impl Cap {
             h,
             rim_centre: light.center + axis * (r * (1.0 - h)),
             rim2: r * r * h * (2.0 - h),
+            frame: Frame::from_normal(axis),
         })
     }
 }
@@ -315,7 +318,7 @@ impl SphereLight {
     /// None on the back of the sphere, which its front hides.
     fn sample_cap_area(&self, cap: Cap, p: DVec3, u: (f64, f64)) -> Option<(DVec3, DVec3, f64)> {
         // Uniform in area on a cap is uniform in its height: the cone warp's z.
-        let n = Frame::from_normal(cap.axis).to_world(warp::uniform_cone(u, cap.h));
+        let n = cap.frame.to_world(warp::uniform_cone(u, cap.h));
         let x = self.sphere.center + n * self.sphere.radius;
         let to = x - p;
         let dist2 = to.length_squared();
