@@ -65,18 +65,23 @@ pub struct RayBatch {
 }
 
 impl RayBatch {
-    pub fn clear(&mut self) {
-        for v in [
+    /// The rays' coordinates, one column each.
+    fn columns(&mut self) -> [&mut Vec<f64>; 6] {
+        [
             &mut self.ox,
             &mut self.oy,
             &mut self.oz,
             &mut self.dx,
             &mut self.dy,
             &mut self.dz,
-            &mut self.t_max,
-        ] {
+        ]
+    }
+
+    pub fn clear(&mut self) {
+        for v in self.columns() {
             v.clear();
         }
+        self.t_max.clear();
         self.len = 0;
     }
 
@@ -116,14 +121,7 @@ impl RayBatch {
     /// size the outputs, every ray starting with no hit before its `t_max`.
     fn prepare(&mut self) {
         let padded = self.len.div_ceil(LANES) * LANES;
-        for v in [
-            &mut self.ox,
-            &mut self.oy,
-            &mut self.oz,
-            &mut self.dx,
-            &mut self.dy,
-            &mut self.dz,
-        ] {
+        for v in self.columns() {
             v.resize(padded, 0.0);
         }
         self.t.clear();

@@ -34,6 +34,27 @@ pub fn russian_roulette(beta: &mut DVec3, depth: u32, u: f64) -> bool {
     }
 }
 
+/// The end of a bounce from `hit` along `wi` that has taken the path to `depth` bounces: the
+/// roulette (its number drawn from `sampler` from [`RR_START_DEPTH`] on, the dimension passed over
+/// before) and, if the path survives, the ray leaving the surface into `ray`. Returns whether the
+/// path goes on.
+#[inline]
+pub fn next_ray(
+    beta: &mut DVec3,
+    depth: u32,
+    sampler: &mut Sampler,
+    hit: &crate::geometry::Hit,
+    wi: DVec3,
+    ray: &mut Ray,
+) -> bool {
+    let u_rr = sampler.get_1d_if(depth >= RR_START_DEPTH);
+    if !russian_roulette(beta, depth, u_rr) {
+        return false;
+    }
+    *ray = Ray::new(crate::geometry::spawn_origin(hit.p, hit.n, hit.err, wi), wi);
+    true
+}
+
 /// The roulette's decision for throughput `beta`: the survival probability q the survivor's
 /// weights are divided by (1 before [`RR_START_DEPTH`]), or None when the path ends. For paths
 /// that carry another quantity beside the throughput the roulette is played on (the light

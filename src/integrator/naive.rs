@@ -6,9 +6,9 @@
 //! closest hits at once ([`Scene::intersect_batch`], spheres tested across eight rays per
 //! vector). Same numbers in the same order per path, so the same image bit for bit.
 
-use super::{russian_roulette, RR_START_DEPTH};
+use super::next_ray;
 use crate::accel::lanes::RayBatch;
-use crate::geometry::{spawn_origin, Hit};
+use crate::geometry::Hit;
 use crate::math::{DVec3, Ray};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -70,12 +70,14 @@ impl NaivePath {
         };
         self.beta *= bs.weight;
         self.depth += 1;
-        let u_rr = sampler.get_1d_if(self.depth >= RR_START_DEPTH);
-        if !russian_roulette(&mut self.beta, self.depth, u_rr) {
-            return false;
-        }
-        self.ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
-        true
+        next_ray(
+            &mut self.beta,
+            self.depth,
+            sampler,
+            hit,
+            bs.wi,
+            &mut self.ray,
+        )
     }
 }
 

@@ -8,7 +8,7 @@
 //! the emission counts in full.
 
 use super::caustics::{connection_ratio, CausticPass};
-use super::{russian_roulette, RR_START_DEPTH};
+use super::next_ray;
 use crate::accel::lanes::RayBatch;
 use crate::geometry::{spawn_origin, Hit};
 use crate::light::LightSample;
@@ -231,12 +231,14 @@ impl PathState {
         self.prev_p = hit.p;
         self.prev_side = spawn_origin(hit.p, hit.n, hit.err, wo);
         self.depth += 1;
-        let u_rr = sampler.get_1d_if(self.depth >= RR_START_DEPTH);
-        if !russian_roulette(&mut self.beta, self.depth, u_rr) {
-            return false;
-        }
-        self.ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
-        true
+        next_ray(
+            &mut self.beta,
+            self.depth,
+            sampler,
+            hit,
+            bs.wi,
+            &mut self.ray,
+        )
     }
 }
 
