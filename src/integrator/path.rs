@@ -48,15 +48,9 @@ pub fn radiance(
             caustics,
             &mut shadows,
         );
-        if let Some(s) = shadows.light {
+        for s in shadows.iter() {
             sampler.count_ray();
-            if scene.first_prim(&s.ray) == Some(s.light) {
-                path.l += s.value;
-            }
-        }
-        if let Some(s) = shadows.join {
-            sampler.count_ray();
-            if scene.intersect(&s.ray, s.len).is_none() {
+            if s.passes(scene.first_prim(&s.ray, s.t_max)) {
                 path.l += s.value;
             }
         }
@@ -66,28 +60,37 @@ pub fn radiance(
     }
 }
 
-/// A light sample's shadow ray: `value` counts if the first thing along `ray` is `light`.
+/// A shadow ray: `value` counts if the first primitive along `ray` within `t_max` is `target`:
+/// the sampled light for light sampling (no distance tolerance, so light cannot leak where a light
+/// sphere grazes a wall, as smallpt's does its ceiling), none at all for a caustic join.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct LightShadow {
+pub(crate) struct Shadow {
     pub ray: Ray,
-    pub light: u32,
+    pub t_max: f64,
+    pub target: Option<u32>,
     pub value: DVec3,
 }
 
-/// A caustic join's shadow ray: `value` counts if nothing is hit within `len` along `ray`.
-#[derive(Clone, Copy, Debug)]
-struct JoinShadow {
-    ray: Ray,
-    len: f64,
-    value: DVec3,
+impl Shadow {
+    /// Whether the ray passes, given the first primitive along it within `t_max`.
+    #[inline]
+    pub fn passes(&self, first: Option<u32>) -> bool {
+        first == self.target
+    }
 }
 
 /// The shadow rays one vertex asks for; their values already carry the path throughput and
 /// are added, in this order, before the next vertex's terms.
 #[derive(Clone, Copy, Debug, Default)]
 struct Shadows {
-    light: Option<LightShadow>,
-    join: Option<JoinShadow>,
+    light: Option<Shadow>,
+    join: Option<Shadow>,
+}
+
+impl Shadows {
+    fn iter(&self) -> impl Iterator<Item = &Shadow> {
+        self.light.iter().chain(&self.join)
+    }
 }
 
 /// One camera path's state between rays.
@@ -274,13 +277,9 @@ impl Stream {
             self.batch.clear();
             for &i in &self.active {
                 let (path, sampler, shadows, go_on) = &mut self.paths[i as usize];
-                if let Some(s) = &shadows.light {
+                for s in shadows.iter() {
                     sampler.count_ray();
-                    self.batch.push(&s.ray, f64::INFINITY);
-                }
-                if let Some(s) = &shadows.join {
-                    sampler.count_ray();
-                    self.batch.push(&s.ray, s.len);
+                    self.batch.push(&s.ray, s.t_max);
                 }
                 if *go_on {
                     sampler.count_ray();
@@ -292,14 +291,9 @@ impl Stream {
             let mut j = 0;
             for &i in &self.active {
                 let (path, sampler, shadows, go_on) = &mut self.paths[i as usize];
-                if let Some(s) = shadows.light {
-                    if self.batch.prim[j] == s.light {
-                        path.l += s.value;
-                    }
-                    j += 1;
-                }
-                if let Some(s) = shadows.join {
-                    if self.batch.prim[j] == u32::MAX {
+                for s in shadows.iter() {
+                    let first = self.batch.prim[j];
+                    if s.passes((first != u32::MAX).then_some(first)) {
                         path.l += s.value;
                     }
                     j += 1;
@@ -312,7 +306,7 @@ impl Stream {
                     (prim != u32::MAX).then(|| scene.hit_at(&path.ray, self.batch.t[j], prim));
                 j += 1;
                 *go_on = path.vertex(scene, hit.as_ref(), sampler, max_depth, caustics, shadows);
-                if *go_on || shadows.light.is_some() || shadows.join.is_some() {
+                if *go_on || shadows.iter().next().is_some() {
                     self.next.push(i);
                 }
             }
@@ -337,7 +331,7 @@ fn connect_caustic(
     c: &CausticPass,
     u: f64,
     beta: DVec3,
-) -> Option<JoinShadow> {
+) -> Option<Shadow> {
     let m = c.vertices.len();
     let k = ((u * m as f64) as usize).min(m - 1);
     // What is left of u once it has chosen k is uniform again: the roulette's number.
@@ -395,9 +389,10 @@ fn connect_caustic(
     if len.is_nan() || len <= 0.0 || !value.is_finite() {
         return None;
     }
-    Some(JoinShadow {
+    Some(Shadow {
         ray: Ray::new(o, seg / len),
-        len,
+        t_max: len,
+        target: None,
         value: beta * value,
     })
 }
@@ -442,7 +437,7 @@ pub(crate) fn direct_light(
         return DVec3::ZERO;
     };
     sampler.count_ray();
-    if scene.first_prim(&s.ray) == Some(s.light) {
+    if s.passes(scene.first_prim(&s.ray, s.t_max)) {
         s.value
     } else {
         DVec3::ZERO
@@ -460,7 +455,7 @@ pub(crate) fn light_shadow(
     sampler: &mut Sampler,
     mis: bool,
     beta: DVec3,
-) -> Option<LightShadow> {
+) -> Option<Shadow> {
     // With one light the choice of light reads no number: its dimension is passed over.
     let u_light = sampler.get_1d_if(scene.lights.len() > 1);
     let u = sampler.get_2d();
@@ -470,16 +465,15 @@ pub(crate) fn light_shadow(
     if e.f_cos.max_element() <= 0.0 || ls.pdf <= 0.0 {
         return None;
     }
-    // Visible if the first thing along the shadow ray is the sampled light itself: no distance
-    // tolerance, so light cannot leak where a light sphere grazes a wall (smallpt's ceiling).
     let w = if mis {
         power_heuristic(ls.pdf, e.pdf)
     } else {
         1.0
     };
-    Some(LightShadow {
+    Some(Shadow {
         ray: shadow_ray(scene, hit, &ls),
-        light: ls.prim,
+        t_max: f64::INFINITY,
+        target: Some(ls.prim),
         value: beta * (e.f_cos * ls.le * (w / ls.pdf)),
     })
 }

@@ -122,10 +122,11 @@ impl Scene {
         self.prims[prim as usize].shape.hit(ray, t, prim)
     }
 
-    /// Index of the first primitive along `ray` (shadow rays: is it the sampled light?).
+    /// Index of the first primitive along `ray` within `t_max` (shadow rays: is it the sampled
+    /// light, or is nothing in the way?).
     #[inline]
-    pub fn first_prim(&self, ray: &Ray) -> Option<u32> {
-        self.accel.closest_prim(&self.prims, ray, f64::INFINITY)
+    pub fn first_prim(&self, ray: &Ray, t_max: f64) -> Option<u32> {
+        self.accel.closest_prim(&self.prims, ray, t_max)
     }
 
     #[inline]
