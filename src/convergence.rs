@@ -12,7 +12,8 @@
 //! - `sampler`: the sample sequence's name (`sobol`, `independent`); a series is one
 //!   integrator x sampler combination, labelled `integrator/sampler` (e.g. `path/sobol`)
 //! - `seconds`: render wall time so far
-//! - `spp`: complete passes so far (samples per pixel)
+//! - `spp`: samples per pixel so far, on average (complete passes, unless adaptive sampling gave
+//!   some pixels more than one sample per pass)
 //! - `samples_per_second`: camera samples so far / `seconds`
 //! - `rmse`, `rel_mse`: measured against the reference (DESIGN.md's metrics); empty without one
 //! - `est_rmse`: the film's own estimate of its RMSE (RMS of the per-pixel standard errors)
@@ -144,7 +145,8 @@ pub fn measure(r: &Renderer, reference: Option<&LinearImage>) -> Checkpoint {
     };
     Checkpoint {
         seconds: st.elapsed.as_secs_f64(),
-        spp: st.complete_passes,
+        // Samples, not passes: the per-sample comparison must count what adaptive sampling adds.
+        spp: r.mean_spp().round() as u32,
         samples_per_second: st.samples_per_second(),
         rays_per_second: st.rays_per_second(),
         rmse,

@@ -8,6 +8,7 @@
 #![forbid(unsafe_op_in_unsafe_fn)]
 
 pub mod accel;
+pub mod adaptive;
 pub mod camera;
 pub mod check;
 pub mod cli;

@@ -5,6 +5,7 @@
 //! the thread count. A cancelled pass still counts as started: resuming goes on with the next pass
 //! index, so no pixel ever reuses a random stream.
 
+use crate::adaptive::{SampleMap, PILOT_PASSES};
 use crate::film::{ErrorEstimate, Film};
 use crate::integrator;
 use crate::integrator::caustics::{CausticPass, CausticTracer, PassSplats};
@@ -87,6 +88,8 @@ pub struct Renderer {
     caustics: Option<CausticTracer>,
     /// What was chosen for caustics, and why.
     caustics_note: String,
+    /// Samples per pixel and pass once the pilot is over (`settings.adaptive`).
+    map: Option<SampleMap>,
 }
 
 /// A rayon pool with `threads` workers (0 = one per core).
@@ -128,6 +131,7 @@ impl Renderer {
             pool,
             stats: RenderStats::default(),
             error: None,
+            map: None,
         })
     }
 
@@ -150,8 +154,49 @@ impl Renderer {
 
     /// The error estimate suited to the sampler in use.
     pub fn error_estimate(&self) -> crate::film::ErrorEstimate {
-        self.film
-            .error_estimate(self.settings.sampler.is_stratified())
+        self.film.error_estimate(self.error_from_halves())
+    }
+
+    /// Whether the film's error is to be read from its half-buffers: when a pixel's samples are
+    /// not independent, because the sampler stratifies them or because the several samples a
+    /// pixel takes in one pass share that pass's light-traced caustic paths.
+    pub fn error_from_halves(&self) -> bool {
+        self.settings.sampler.is_stratified() || (self.map.is_some() && self.caustics.is_some())
+    }
+
+    /// The adaptive sampling map, once built.
+    pub fn sample_map(&self) -> Option<&SampleMap> {
+        self.map.as_ref()
+    }
+
+    /// Whether adaptive sampling applies: asked for, and an estimator (painterly is not one).
+    pub fn adaptive(&self) -> bool {
+        self.settings.adaptive && self.settings.integrator != IntegratorKind::Painterly
+    }
+
+    /// What the sampling does, for summaries.
+    pub fn sampling_note(&self) -> String {
+        match (&self.map, self.adaptive()) {
+            (Some(m), _) => format!(
+                "adaptive from pass {}: {:.2} samples per pixel and pass on average, 1 to {:.1} \
+                 (more where the neighbours' pilot samples vary most)",
+                m.start(),
+                m.mean(),
+                m.max()
+            ),
+            (None, true) => {
+                format!("adaptive after a pilot of {PILOT_PASSES} uniform passes (not reached yet)")
+            }
+            (None, false) if self.settings.adaptive => {
+                "uniform, one sample per pixel and pass (painterly is not an estimator)".into()
+            }
+            (None, false) => "uniform, one sample per pixel and pass (adaptive = false)".into(),
+        }
+    }
+
+    /// Mean samples per pixel so far (valid or not).
+    pub fn mean_spp(&self) -> f64 {
+        self.stats.samples as f64 / self.settings.pixels().max(1) as f64
     }
 
     /// Whether the target sample count or the target error has been reached.
@@ -178,6 +223,11 @@ impl Renderer {
         let started = Instant::now();
         let pass = self.stats.passes;
         self.stats.passes += 1;
+        if self.adaptive() && self.map.is_none() && pass >= PILOT_PASSES && pass.is_multiple_of(2) {
+            let film = &self.film;
+            self.map = Some(self.pool.install(|| SampleMap::build(film, pass)));
+        }
+        let map = self.map.as_ref();
         let scene = &*self.scene;
         let settings = &self.settings;
         let threads = self.pool.current_num_threads() as u32;
@@ -187,6 +237,7 @@ impl Renderer {
         let invalid = AtomicU64::new(0);
         let samples = AtomicU64::new(0);
         let rays = AtomicU64::new(0);
+        let rows_done = AtomicU64::new(0);
         let splats = match self.caustics.as_ref() {
             Some(t) if !cancel.load(Ordering::Relaxed) => self
                 .pool
@@ -205,7 +256,7 @@ impl Renderer {
         let film = &mut self.film;
         self.pool.install(|| {
             film.par_bands(band_rows).for_each(|mut band| {
-                let (mut bad, mut done, mut traced) = (0u64, 0u64, 0u64);
+                let (mut bad, mut done, mut traced, mut rows) = (0u64, 0u64, 0u64, 0u64);
                 let first = band.first_row * settings.width;
                 let mut band_splats = splats
                     .range(first, first + band.rows() * settings.width)
@@ -223,15 +274,24 @@ impl Renderer {
                         settings,
                         y,
                         pass,
+                        map,
                         caustics,
                         &mut scratch,
                         &mut values,
                     );
-                    for (x, &(mut v, r)) in (0..settings.width).zip(&values) {
+                    // Each of a pixel's samples of this pass gets the pass's splats: each sum
+                    // is an unbiased estimate (they share the splats' noise, which is why the
+                    // error is then read from the half-buffers, split by pass).
+                    let mut splat = (u32::MAX, DVec3::ZERO);
+                    for (&(x, _), &(v, r)) in scratch.plan.iter().zip(&values) {
                         let pixel = y * settings.width + x;
-                        while let Some(s) = band_splats.next_if(|s| s.0 == pixel) {
-                            v += glam::Vec3::from_array(s.1).as_dvec3();
+                        if splat.0 != pixel {
+                            splat = (pixel, DVec3::ZERO);
+                            while let Some(s) = band_splats.next_if(|s| s.0 == pixel) {
+                                splat.1 += glam::Vec3::from_array(s.1).as_dvec3();
+                            }
                         }
+                        let v = v + splat.1;
                         done += 1;
                         traced += r as u64;
                         if v.is_finite() {
@@ -240,7 +300,9 @@ impl Renderer {
                             bad += 1;
                         }
                     }
+                    rows += 1;
                 }
+                rows_done.fetch_add(rows, Ordering::Relaxed);
                 invalid.fetch_add(bad, Ordering::Relaxed);
                 samples.fetch_add(done, Ordering::Relaxed);
                 rays.fetch_add(traced, Ordering::Relaxed);
@@ -250,13 +312,12 @@ impl Renderer {
         self.stats.samples += done;
         self.stats.invalid += invalid.into_inner();
         self.stats.rays += rays.into_inner();
-        let outcome = if done == settings.pixels() as u64 {
+        let outcome = if rows_done.into_inner() == settings.height as u64 {
             self.stats.complete_passes += 1;
             if settings.target_error.is_some() {
                 // On the render pool, and counted in the render time: the check is part of it.
-                let film = &self.film;
-                let stratified = settings.sampler.is_stratified();
-                self.error = Some(self.pool.install(|| film.error_estimate(stratified)));
+                let (film, halves) = (&self.film, self.error_from_halves());
+                self.error = Some(self.pool.install(|| film.error_estimate(halves)));
             }
             PassOutcome::Complete
         } else {
@@ -276,11 +337,17 @@ impl Renderer {
     }
 }
 
-/// One camera sample of pixel (x, y) in pass `pass`: a jittered ray through the pixel's square
-/// footprint (box filter) and its radiance.
+/// Camera sample number `sample` of pixel (x, y) (without adaptive sampling, the one of pass
+/// `sample`): a jittered ray through the pixel's square footprint (box filter) and its radiance.
 #[inline]
-pub fn sample_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, pass: u32) -> DVec3 {
-    sample_pixel_counted(scene, settings, x, y, pass, None).0
+pub fn sample_pixel(
+    scene: &Scene,
+    settings: &RenderSettings,
+    x: u32,
+    y: u32,
+    sample: u64,
+) -> DVec3 {
+    sample_pixel_counted(scene, settings, x, y, sample, None).0
 }
 
 /// [`sample_pixel`] and the number of closest-hit queries its path traced. With `caustics`,
@@ -292,33 +359,33 @@ pub fn sample_pixel_counted(
     settings: &RenderSettings,
     x: u32,
     y: u32,
-    pass: u32,
+    sample: u64,
     caustics: Option<CausticPass>,
 ) -> (DVec3, u32) {
-    let (ray, mut sampler) = camera_sample(scene, settings, x, y, pass);
+    let (ray, mut sampler) = camera_sample(scene, settings, x, y, sample);
     let l = integrator::radiance(
         settings,
         scene,
         ray,
         &mut sampler,
-        integrator::PixelSample { x, y, pass },
+        integrator::PixelSample { x, y, sample },
         caustics,
     );
     (l, sampler.rays())
 }
 
-/// The sampler of pixel (x, y) in pass `pass` and its camera ray, jittered over the pixel's square
-/// footprint (box filter) by the sampler's first two dimensions.
+/// The sampler of sample number `sample` of pixel (x, y) and its camera ray, jittered over the
+/// pixel's square footprint (box filter) by the sampler's first two dimensions.
 #[inline]
 fn camera_sample(
     scene: &Scene,
     settings: &RenderSettings,
     x: u32,
     y: u32,
-    pass: u32,
+    sample: u64,
 ) -> (Ray, Sampler) {
     let pixel = y as u64 * settings.width as u64 + x as u64;
-    let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, pass as u64);
+    let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, sample);
     let (jx, jy) = sampler.get_2d();
     let ray = scene.camera.ray(
         settings.width,
@@ -334,21 +401,43 @@ fn camera_sample(
 pub struct RowScratch {
     naive: integrator::naive::Stream,
     path: integrator::path::Stream,
+    /// The row's samples of the pass: (x, sample number), in x order.
+    pub plan: Vec<(u32, u64)>,
 }
 
-/// One sample of every pixel of row `y` into `out` (radiance and closest-hit queries, by x):
-/// [`sample_pixel_counted`] pixel by pixel for `painterly`; `path` and `naive` trace the row's
-/// paths side by side with batched closest-hit queries (the same image bit for bit, faster).
+/// The samples of every pixel of row `y` in pass `pass` (one each, or as `map` says) into `out`
+/// (radiance and closest-hit queries), in the order of `scratch.plan`: [`sample_pixel_counted`]
+/// one by one for `painterly`; `path` and `naive` trace the row's paths side by side with batched
+/// closest-hit queries (the same image bit for bit, faster).
+#[allow(clippy::too_many_arguments)]
 pub fn sample_row(
     scene: &Scene,
     settings: &RenderSettings,
     y: u32,
     pass: u32,
+    map: Option<&SampleMap>,
     caustics: Option<CausticPass>,
     scratch: &mut RowScratch,
     out: &mut Vec<(DVec3, u32)>,
 ) {
-    let samples = (0..settings.width).map(|x| camera_sample(scene, settings, x, y, pass));
+    scratch.plan.clear();
+    match map {
+        None => scratch
+            .plan
+            .extend((0..settings.width).map(|x| (x, pass as u64))),
+        Some(map) => {
+            for x in 0..settings.width {
+                let (first, n) = map.samples(x, y, pass);
+                scratch
+                    .plan
+                    .extend((0..n as u64).map(|j| (x, first + 2 * j)));
+            }
+        }
+    }
+    let plan = &scratch.plan;
+    let samples = plan
+        .iter()
+        .map(|&(x, sample)| camera_sample(scene, settings, x, y, sample));
     let max_depth = integrator::depth_limit(settings);
     match settings.integrator {
         IntegratorKind::Naive => return scratch.naive.radiance(scene, samples, max_depth, out),
@@ -361,7 +450,8 @@ pub fn sample_row(
     }
     out.clear();
     out.extend(
-        (0..settings.width).map(|x| sample_pixel_counted(scene, settings, x, y, pass, caustics)),
+        plan.iter()
+            .map(|&(x, sample)| sample_pixel_counted(scene, settings, x, y, sample, caustics)),
     );
 }
 
@@ -371,11 +461,29 @@ mod tests {
     use crate::integrator::caustics::CausticTracer;
     use crate::sampling::SamplerKind;
 
-    /// The batched drivers of `path` and `naive` give every pixel the bits and the ray count of
+    /// A 40x30 adaptive map with weights from 1 to the maximum: noise grows to the right.
+    fn test_map() -> SampleMap {
+        let mut film = Film::new(40, 30);
+        for pass in 0..PILOT_PASSES {
+            film.par_bands(1).for_each(|mut band| {
+                for x in 0..40 {
+                    let v = ((pass * 7 + x) % 5) as f64 * (x as f64 / 10.0).powi(4);
+                    band.add(x, 0, pass, DVec3::splat(v));
+                }
+            });
+        }
+        let map = SampleMap::build(&film, PILOT_PASSES);
+        assert!(map.max() > 3.0 && map.weight(0, 0) == 1.0, "{map:?}");
+        map
+    }
+
+    /// The batched drivers of `path` and `naive` give every sample the bits and the ray count of
     /// the one-path-at-a-time integrators: on sphere scenes (flat scan, 8-ray lanes), a mesh
-    /// (BVH), with and without caustic joins, both samplers, a depth limit.
+    /// (BVH), with and without caustic joins, both samplers, a depth limit, one sample per pixel
+    /// or an adaptive map's several, each with the sample number the map gives it.
     #[test]
     fn rows_traced_side_by_side_match_paths_traced_alone() {
+        let map = test_map();
         for name in ["cornell", "cornell-small-light", "torus-knot"] {
             let scene = crate::scene::load(name).expect("built-in scene");
             for (integrator, sampler, max_depth) in [
@@ -394,7 +502,13 @@ mod tests {
                 let tracer = CausticTracer::new(&scene, &settings).ok();
                 let mut scratch = RowScratch::default();
                 let mut row = Vec::new();
-                for pass in 0..3 {
+                for (pass, map) in [
+                    (0, None),
+                    (1, None),
+                    (2, None),
+                    (16, Some(&map)),
+                    (17, Some(&map)),
+                ] {
                     let splats = tracer.as_ref().map(|t| t.trace_pass(&scene, 5, pass));
                     let caustics =
                         tracer
@@ -406,11 +520,28 @@ mod tests {
                                 light_paths: s.paths,
                             });
                     for y in [0, 13, 29] {
-                        sample_row(&scene, &settings, y, pass, caustics, &mut scratch, &mut row);
-                        assert_eq!(row.len(), 40);
-                        for (x, &(v, rays)) in (0..40).zip(&row) {
+                        sample_row(
+                            &scene,
+                            &settings,
+                            y,
+                            pass,
+                            map,
+                            caustics,
+                            &mut scratch,
+                            &mut row,
+                        );
+                        let expected: Vec<(u32, u64)> = (0..40)
+                            .flat_map(|x| {
+                                let (first, n) =
+                                    map.map_or((pass as u64, 1), |m| m.samples(x, y, pass));
+                                (0..n as u64).map(move |j| (x, first + 2 * j))
+                            })
+                            .collect();
+                        assert_eq!(scratch.plan, expected);
+                        assert_eq!(row.len(), expected.len());
+                        for (&(x, sample), &(v, rays)) in expected.iter().zip(&row) {
                             let (w, r) =
-                                sample_pixel_counted(&scene, &settings, x, y, pass, caustics);
+                                sample_pixel_counted(&scene, &settings, x, y, sample, caustics);
                             assert_eq!(
                                 (v.to_array().map(f64::to_bits), rays),
                                 (w.to_array().map(f64::to_bits), r),

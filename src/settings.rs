@@ -11,10 +11,11 @@
 //! seed = 0
 //! exposure = 1.0
 //! tonemap = "clamp"       # clamp | reinhard | aces
+//! target_error = 0.01     # optional: stop once the estimated relative error is this low
+//! adaptive = true         # more samples per pass where the pilot found noise (default true)
 //!
 //! [render.painterly]      # see `integrator::painterly::params`
 //! strength = 1.0
-//! target_error = 0.01     # optional: stop once the estimated relative error is this low
 //! ```
 
 pub use crate::integrator::painterly::params::{Hemisphere, PainterlyOverrides, PainterlyParams};
@@ -116,6 +117,9 @@ pub struct RenderSettings {
     /// Stop once the film's estimated relative error (`ErrorEstimate::relative`) is at or below
     /// this, checked after every pass; `spp` stays the upper bound.
     pub target_error: Option<f64>,
+    /// After a pilot of uniform passes, give noisy pixels more samples per pass (see
+    /// `adaptive`); `spp` then counts passes, each at least one sample of every pixel.
+    pub adaptive: bool,
 }
 
 impl Default for RenderSettings {
@@ -134,6 +138,7 @@ impl Default for RenderSettings {
             threads: 0,
             painterly: PainterlyParams::default(),
             target_error: None,
+            adaptive: true,
         }
     }
 }
@@ -178,6 +183,7 @@ pub struct SettingsOverrides {
         deserialize_with = "crate::scene::description::de_positive_opt"
     )]
     pub target_error: Option<f64>,
+    pub adaptive: Option<bool>,
 }
 
 impl RenderSettings {
@@ -186,7 +192,10 @@ impl RenderSettings {
         macro_rules! take {
             ($($f:ident),*) => { $( if let Some(v) = o.$f { self.$f = v; } )* };
         }
-        take!(width, height, spp, seed, integrator, sampler, caustics, exposure, tonemap, threads);
+        take!(
+            width, height, spp, seed, integrator, sampler, caustics, exposure, tonemap, threads,
+            adaptive
+        );
         if let Some(d) = o.max_depth {
             self.max_depth = Some(d);
         }

@@ -41,7 +41,7 @@ fn count(scene: &Arc<Scene>, s: RenderSettings) -> (u64, u64) {
     for pass in 0..s.spp {
         for y in 0..s.height {
             for x in 0..s.width {
-                by_sample += sample_pixel_counted(scene, &s, x, y, pass, None).1 as u64;
+                by_sample += sample_pixel_counted(scene, &s, x, y, pass as u64, None).1 as u64;
             }
         }
     }

@@ -159,6 +159,10 @@ pub struct SettingsArgs {
     /// pass; --spp stays the upper bound.
     #[arg(long, value_name = "E", value_parser = parse_positive)]
     pub target_error: Option<f64>,
+    /// After a pilot of 16 uniform passes, give pixels whose neighbourhood is noisy more samples
+    /// per pass (unbiased; default true). --spp then counts passes.
+    #[arg(long, value_name = "BOOL", action = clap::ArgAction::Set)]
+    pub adaptive: Option<bool>,
 }
 
 impl SettingsArgs {
@@ -183,6 +187,7 @@ impl SettingsArgs {
                 depth: self.paint_depth,
             },
             target_error: self.target_error,
+            adaptive: self.adaptive,
         }
     }
 }

@@ -70,15 +70,17 @@ pub fn summary(r: &Renderer) -> String {
     let st = r.stats();
     let err = r.error_estimate();
     format!(
-        "{name}: {w}x{h}, {spp} spp, {integ} integrator, seed {seed}, {threads} threads\n\
-         time {time:.2} s (scene build {build:.1} ms), {rate:.2} M samples/s, invalid samples {invalid}\n\
+        "{name}: {w}x{h}, {spp}, {integ} integrator, seed {seed}, {threads} threads\n\
+         time {time:.2} s (scene build {build:.1} ms), {rate:.2} M samples/s, {rays:.1} M rays, \
+         invalid samples {invalid}\n\
          {report}; caustics: {caustics}{light_paths}\n\
+         sampling: {sampling}\n\
          estimated error: rmse {rmse:.5}, relative {rel:.5}\n\
          {stop}\n",
         name = r.scene.name,
         w = s.width,
         h = s.height,
-        spp = st.complete_passes,
+        spp = spp_text(r),
         integ = match s.integrator {
             IntegratorKind::Painterly => format!("painterly ({})", s.painterly),
             kind => kind.name().to_string(),
@@ -88,6 +90,8 @@ pub fn summary(r: &Renderer) -> String {
         time = st.elapsed.as_secs_f64(),
         build = r.scene.report.build_time.as_secs_f64() * 1e3,
         rate = st.samples_per_second() / 1e6,
+        rays = st.rays as f64 / 1e6,
+        sampling = r.sampling_note(),
         invalid = st.invalid,
         report = r.scene.report,
         caustics = r.caustics_note(),
@@ -106,17 +110,26 @@ pub fn summary(r: &Renderer) -> String {
     )
 }
 
+/// Passes, and with adaptive sampling the samples per pixel they came to on average.
+pub fn spp_text(r: &Renderer) -> String {
+    let passes = r.stats().complete_passes;
+    match r.sample_map() {
+        Some(_) => format!("{passes} spp ({:.1} per pixel on average)", r.mean_spp()),
+        None => format!("{passes} spp"),
+    }
+}
+
 /// Why the render ended, in the words the summary uses.
 pub fn stop_reason(r: &Renderer) -> String {
-    let spp = r.stats().complete_passes;
+    let spp = spp_text(r);
     match r.settings.target_error {
         Some(e) if r.target_error_reached() => {
-            format!("stopped at target error {e} after {spp} spp")
+            format!("stopped at target error {e} after {spp}")
         }
-        Some(e) if spp >= r.settings.spp => {
-            format!("target error {e} not reached within the spp limit: stopped after {spp} spp (raise --spp)")
+        Some(e) if r.stats().complete_passes >= r.settings.spp => {
+            format!("target error {e} not reached within the spp limit: stopped after {spp} (raise --spp)")
         }
-        Some(e) => format!("target error {e} not reached: stopped after {spp} spp"),
-        None => format!("stopped after {spp} spp"),
+        Some(e) => format!("target error {e} not reached: stopped after {spp}"),
+        None => format!("stopped after {spp}"),
     }
 }

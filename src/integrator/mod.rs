@@ -83,7 +83,9 @@ pub fn depth_limit(settings: &RenderSettings) -> u32 {
 pub struct PixelSample {
     pub x: u32,
     pub y: u32,
-    pub pass: u32,
+    /// The pixel's sample number (its pass, without adaptive sampling, which painterly never
+    /// uses).
+    pub sample: u64,
 }
 
 /// Radiance along `ray` by the integrator `settings` choose.
@@ -102,7 +104,8 @@ pub fn radiance(
         IntegratorKind::Naive => naive::radiance(scene, ray, sampler, max_depth),
         IntegratorKind::Painterly => {
             let p = &settings.painterly;
-            let stream = painterly::stream::PaintStream::new(settings.seed, px.x, px.y, px.pass, p);
+            let stream =
+                painterly::stream::PaintStream::new(settings.seed, px.x, px.y, px.sample as u32, p);
             painterly::radiance(scene, ray, sampler, max_depth, p, &stream)
         }
     }

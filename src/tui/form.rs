@@ -25,6 +25,7 @@ pub enum Field {
     Stroke,
     Strength,
     Sampler,
+    Adaptive,
     Seed,
     Exposure,
     Tonemap,
@@ -34,7 +35,7 @@ pub enum Field {
 }
 
 impl Field {
-    pub const ALL: [Field; 17] = [
+    pub const ALL: [Field; 18] = [
         Field::Scene,
         Field::Width,
         Field::Height,
@@ -46,6 +47,7 @@ impl Field {
         Field::Stroke,
         Field::Strength,
         Field::Sampler,
+        Field::Adaptive,
         Field::Seed,
         Field::Exposure,
         Field::Tonemap,
@@ -67,6 +69,7 @@ impl Field {
             Field::Stroke => "stroke",
             Field::Strength => "strength",
             Field::Sampler => "sampler",
+            Field::Adaptive => "adaptive",
             Field::Seed => "seed",
             Field::Exposure => "exposure",
             Field::Tonemap => "tonemap",
@@ -89,7 +92,12 @@ impl Field {
     pub fn cycles(self) -> bool {
         matches!(
             self,
-            Field::Integrator | Field::Hemisphere | Field::Sampler | Field::Tonemap | Field::Color
+            Field::Integrator
+                | Field::Hemisphere
+                | Field::Sampler
+                | Field::Adaptive
+                | Field::Tonemap
+                | Field::Color
         )
     }
 
@@ -192,6 +200,8 @@ impl Form {
             Field::Stroke => s.painterly.stroke.to_string(),
             Field::Strength => s.painterly.strength.to_string(),
             Field::Sampler => s.sampler.name().into(),
+            Field::Adaptive if s.adaptive => "on".into(),
+            Field::Adaptive => "off".into(),
             Field::Seed => s.seed.to_string(),
             Field::Exposure => s.exposure.to_string(),
             Field::Tonemap => s.tonemap.name().into(),
@@ -231,6 +241,7 @@ impl Form {
             Field::Sampler => {
                 self.overrides.sampler = Some(next::<SamplerKind>(&now.settings.sampler))
             }
+            Field::Adaptive => self.overrides.adaptive = Some(!now.settings.adaptive),
             Field::Tonemap => self.overrides.tonemap = Some(next::<Tonemap>(&now.settings.tonemap)),
             Field::Color => self.color = next::<ColorChoice>(&self.color),
             _ => {}
@@ -325,6 +336,7 @@ impl Form {
             Field::Integrator
             | Field::Hemisphere
             | Field::Sampler
+            | Field::Adaptive
             | Field::Tonemap
             | Field::Color => {}
         }
@@ -373,12 +385,18 @@ mod tests {
         assert_eq!(f.value(Field::TargetError, &shown(&s)), "off");
         f.cycle(Field::Sampler, &shown(&s));
         assert_eq!(f.overrides.sampler, Some(SamplerKind::Independent));
+        assert_eq!(f.value(Field::Adaptive, &shown(&s)), "on");
+        f.cycle(Field::Adaptive, &shown(&s));
+        assert_eq!(f.overrides.adaptive, Some(false));
         f.cycle(Field::Hemisphere, &shown(&s));
         assert_eq!(f.overrides.painterly.hemisphere, Some(Hemisphere::Normal));
         // Both wrap around to their first value.
         let s = RenderSettings::merged(&[&f.overrides]);
+        assert_eq!(f.value(Field::Adaptive, &shown(&s)), "off");
         f.cycle(Field::Sampler, &shown(&s));
         f.cycle(Field::Hemisphere, &shown(&s));
+        f.cycle(Field::Adaptive, &shown(&s));
+        assert_eq!(f.overrides.adaptive, Some(true));
         assert_eq!(f.overrides.sampler, Some(SamplerKind::Sobol));
         assert_eq!(f.overrides.painterly.hemisphere, Some(Hemisphere::WorldZ));
     }

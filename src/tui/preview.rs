@@ -261,6 +261,7 @@ mod tests {
             stats: RenderStats::default(),
             error: ErrorEstimate::default(),
             target_spp: 1,
+            samples_per_pass: 1.0,
             status: JobStatus::Running,
         }
     }

@@ -12,7 +12,7 @@
 
 use super::app::{App, Message};
 use super::form::{Field, Shown};
-use super::worker::JobStatus;
+use super::worker::{JobStatus, Snapshot};
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style, Stylize};
 use ratatui::symbols::Marker;
@@ -233,6 +233,17 @@ pub fn fmt_duration(secs: f64) -> String {
     }
 }
 
+/// With adaptive sampling, the samples per pixel the passes came to on average.
+fn mean_spp(snap: &Snapshot) -> String {
+    let pixels = (snap.width as f64 * snap.height as f64).max(1.0);
+    let mean = snap.stats.samples as f64 / pixels;
+    if snap.samples_per_pass > 1.0 {
+        format!(" ({mean:.1}/px)")
+    } else {
+        String::new()
+    }
+}
+
 fn draw_gauge(frame: &mut Frame, app: &App, area: Rect) {
     let Some(snap) = &app.snapshot else {
         frame.render_widget(Line::from(" waiting for the first pass…").dark_gray(), area);
@@ -241,9 +252,13 @@ fn draw_gauge(frame: &mut Frame, app: &App, area: Rect) {
     let done = snap.stats.complete_passes;
     let target = snap.target_spp.max(1);
     let elapsed = snap.stats.elapsed.as_secs_f64();
+    // Remaining passes at the current sampling rate: with adaptive sampling the passes after the
+    // pilot take more samples than the ones so far.
+    let rate = snap.stats.samples_per_second();
+    let per_pass = snap.samples_per_pass * snap.width as f64 * snap.height as f64;
     let eta = match snap.status {
-        JobStatus::Running | JobStatus::Paused if done > 0 => {
-            fmt_duration(elapsed * (target.saturating_sub(done)) as f64 / done as f64)
+        JobStatus::Running | JobStatus::Paused if done > 0 && rate > 0.0 => {
+            fmt_duration(target.saturating_sub(done) as f64 * per_pass / rate)
         }
         JobStatus::Running | JobStatus::Paused => "--".into(),
         _ => "0:00".into(),
@@ -280,8 +295,9 @@ fn draw_status(frame: &mut Frame, app: &App, area: Rect) {
             );
             Line::from(vec![
                 Span::raw(format!(
-                    " {} spp · {:.2} M samples/s · {err} · ",
+                    " {} spp{} · {:.2} M samples/s · {err} · ",
                     snap.stats.complete_passes,
+                    mean_spp(snap),
                     snap.stats.samples_per_second() / 1e6,
                 )),
                 invalid,
@@ -522,6 +538,7 @@ mod tests {
                 rel_mse: 0.0009,
             },
             target_spp: 128,
+            samples_per_pass: 1.0,
             status: JobStatus::Running,
         };
         app.on_worker(WorkerEvent::Progress(Arc::new(snap)));

@@ -63,6 +63,8 @@ pub struct Snapshot {
     pub stats: RenderStats,
     pub error: ErrorEstimate,
     pub target_spp: u32,
+    /// Mean samples per pixel in a pass from now on (1 until an adaptive map is built).
+    pub samples_per_pass: f64,
     pub status: JobStatus,
 }
 
@@ -384,8 +386,8 @@ impl Worker {
         job.last_sent = Some(Instant::now());
         let Some(job) = &self.job else { return };
         let film = job.renderer.film();
-        let stratified = job.renderer.settings.sampler.is_stratified();
-        let (rgb, error) = self.on_pool(|| (film.mean_rgb_f32(), film.error_estimate(stratified)));
+        let halves = job.renderer.error_from_halves();
+        let (rgb, error) = self.on_pool(|| (film.mean_rgb_f32(), film.error_estimate(halves)));
         let snap = Snapshot {
             job: job.id,
             width: film.width,
@@ -394,6 +396,7 @@ impl Worker {
             stats: job.renderer.stats(),
             error,
             target_spp: job.renderer.settings.spp,
+            samples_per_pass: job.renderer.sample_map().map_or(1.0, |m| m.mean()),
             status: job.status,
         };
         self.send(WorkerEvent::Progress(Arc::new(snap)));
