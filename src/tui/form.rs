@@ -109,9 +109,14 @@ impl Field {
         )
     }
 
-    /// Whether the form shows this field when `integrator` is in effect.
+    /// Whether the form shows this field when `integrator` is in effect (painterly's knobs only
+    /// for it; adaptive sampling, which painterly does not use, only for the others).
     pub fn shown_for(self, integrator: IntegratorKind) -> bool {
-        !self.painterly() || integrator == IntegratorKind::Painterly
+        let painterly = integrator == IntegratorKind::Painterly;
+        match self {
+            Field::Adaptive => !painterly,
+            f => !f.painterly() || painterly,
+        }
     }
 
     /// The fields shown when `integrator` is in effect, in order.
@@ -450,9 +455,11 @@ mod tests {
     #[test]
     fn painterly_fields_show_only_for_the_painterly_integrator() {
         let painterly: Vec<Field> = Field::visible(IntegratorKind::Painterly).collect();
-        assert_eq!(painterly, Field::ALL);
+        assert_eq!(painterly.len(), Field::ALL.len() - 1);
+        assert!(!painterly.contains(&Field::Adaptive));
         let path: Vec<Field> = Field::visible(IntegratorKind::Path).collect();
         assert_eq!(path.len(), Field::ALL.len() - 4);
+        assert!(path.contains(&Field::Adaptive));
         assert!(path.iter().all(|f| !f.painterly()));
         assert!(path.contains(&Field::Sampler));
 
