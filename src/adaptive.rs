@@ -40,14 +40,18 @@ const BLOCK: u32 = 2;
 const STEPS: f64 = 16.0;
 
 /// Pixels of the ring around a block whose pilot samples set its weight. Cornell, MSE x rays at
-/// 96 spp: rings of 1, 2, 4 pixels 0.000071, 0.000070, 0.000064 (6: 0.000063, for 2.3x the work).
+/// 96 spp: rings of 1 and 4 pixels 0.000071 and 0.000064 (6, at scale 3: 0.000063, for twice the
+/// pooling).
 const RING: u32 = 4;
 
 /// The scale of the counts, as a multiple of the fixed point that minimises error x cost.
 /// That optimum takes every sample to cost the same and the pilot's deviations to be exact;
 /// neither holds (the noisy pixels' paths are the long ones through the glass, and a pilot's
-/// outlier inflates a deviation), so it over-spends: cornell, MSE x rays at 96 spp, factor 1,
-/// 2, 3, 4: 0.000071-0.000074, 0.000063, 0.000063, 0.000066 (uniform: 0.000080).
+/// outlier inflates a deviation), so it over-spends: cornell, MSE x rays at 96 spp, factor 2
+/// and 3 with a ring of 2: 0.000071 and 0.000067; 2, 3 and 4 with a ring of 4 and a 32-pass
+/// pilot: 0.000063, 0.000063, 0.000066 (uniform: 0.000080). Factor 1 (a half-buffer map, ring
+/// of 2) took 2.4 samples per pixel and pass and 16.0 s where factor 2 took 10.7 s: MSE x
+/// seconds 0.0143 vs 0.0136.
 const LAMBDA_FACTOR: f64 = 2.5;
 
 /// Per-pixel samples per pass, fixed from the pilot.

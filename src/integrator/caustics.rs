@@ -9,7 +9,11 @@
 //! The two estimators split path space, so nothing is counted twice and nothing is lost: the
 //! light tracer covers exactly the paths whose light vertex is in an emitter's [`Region`], left
 //! outwards, reach a diffuse surface through at least one specular bounce and are seen directly
-//! from the camera; the camera paths skip precisely those ([`CausticTracer::covers`]) and keep
+//! from the camera, and those that go on from that first diffuse vertex y with one bounce through
+//! one or more specular bounces to a diffuse x seen directly (a caustic of a caustic: on
+//! `cornell`, the floor's caustic seen through the glass ball from the ceiling and the walls,
+//! fireflies of 27 that were a halo of error around the lamp); the camera paths skip precisely
+//! those ([`CausticTracer::covers`] at the light, `PathState::caustic_end` for the shape) and keep
 //! everything else. The tracer's emission directions are drawn only towards the scene's specular
 //! spheres, which is complete because every path it must cover starts by hitting one; so it is
 //! used only when all delta materials sit on spheres (a mirror mesh turns it off, as does a depth
@@ -388,7 +392,9 @@ impl CausticTracer {
     }
 
     /// One light path: emit towards a specular sphere, follow the specular chain, splat the
-    /// first diffuse hit seen by the camera.
+    /// first diffuse hit y seen by the camera; then bounce once off y, and if that reaches another
+    /// diffuse hit x through one or more specular bounces, splat x too (a caustic of a caustic:
+    /// cornell's floor caustic seen through the glass ball from the ceiling and walls).
     fn trace(&self, scene: &Scene, rng: &mut Rng, out: &mut PassSplats) {
         let e = *self.pick_emitter(rng.next_f64());
         let light = &scene.lights.lights[e.light];
@@ -420,6 +426,9 @@ impl CausticTracer {
         let mut chain_cos = 1.0;
         let mut ray = Ray::new(spawn_origin(y0, n0, err0, w), w);
         let mut bounces = 0u32;
+        // Specular bounces since the light or the diffuse vertex y, and whether y is behind.
+        let mut run = 0u32;
+        let mut past_y = false;
         let mut throughput = DVec3::ONE;
         loop {
             out.rays += 1;
@@ -429,11 +438,14 @@ impl CausticTracer {
             let m = scene.material(&hit);
             let wo = -ray.d;
             if !m.is_delta() {
-                if bounces > 0 {
-                    self.splat(scene, &hit, wo, beta, out);
-                    if !self.connect {
-                        return;
-                    }
+                if run == 0 {
+                    return;
+                }
+                self.splat(scene, &hit, wo, beta, out);
+                if past_y {
+                    return;
+                }
+                if self.connect {
                     let vertex = CausticVertex {
                         p: hit.p,
                         n: encode_unit(hit.n),
@@ -450,13 +462,18 @@ impl CausticTracer {
                         out.vertices.push(vertex);
                     }
                 }
-                return;
+                past_y = true;
             }
             let Some(bs) = m.sample(wo, hit.n, rng.next_f64(), (rng.next_f64(), rng.next_f64()))
             else {
                 return;
             };
-            chain_cos *= hit.n.dot(wo).abs() / hit.n.dot(bs.wi).abs();
+            if m.is_delta() {
+                chain_cos *= hit.n.dot(wo).abs() / hit.n.dot(bs.wi).abs();
+                run += 1;
+            } else {
+                run = 0;
+            }
             let weight = bs.weight * importance_scale(m.kind, wo, bs.wi, hit.n);
             beta *= weight;
             throughput *= weight;

@@ -106,9 +106,12 @@ struct PathState {
     prev_p: DVec3,
     prev_side: DVec3,
     prev_pdf_bsdf: f64,
-    /// Whether the last non-delta vertex was the first hit (a caustic end the tracer covers),
-    /// and the delta bounces since.
+    /// Whether the last non-delta vertex is one from which the tracer covers a specular chain to
+    /// a light: the first hit x, or the next non-delta vertex y if x reached it through one or
+    /// more delta bounces (the tracer bounces once off y, see `CausticTracer::trace`); whether
+    /// that vertex was the first hit; and the delta bounces since.
     caustic_end: bool,
+    at_first: bool,
     delta_run: u32,
     /// At a non-delta vertex y reached straight from a non-delta x: x's BSDF pdf times
     /// cos_y / d^2 and, once y's bounce is sampled, times y's BSDF pdf; kept through the
@@ -128,6 +131,7 @@ impl PathState {
             prev_side: ray.o,
             prev_pdf_bsdf: 0.0,
             caustic_end: false,
+            at_first: false,
             delta_run: 0,
             chain_pdf: None,
         }
@@ -188,7 +192,9 @@ impl PathState {
         if material.is_delta() {
             self.delta_run += 1;
         } else {
-            self.caustic_end = self.depth == 0;
+            let second = self.caustic_end && self.at_first && self.delta_run > 0;
+            self.at_first = self.depth == 0;
+            self.caustic_end = self.at_first || second;
             self.delta_run = 0;
             self.chain_pdf = (!self.specular)
                 .then(|| self.prev_pdf_bsdf * hit.n.dot(ray.d).abs() / (hit.t * hit.t));
