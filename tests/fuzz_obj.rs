@@ -8,7 +8,6 @@ use proptest::prelude::*;
 use ptui::render::Renderer;
 use ptui::scene::{load_str, mesh};
 use ptui::settings::{RenderSettings, SettingsOverrides};
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
@@ -138,18 +137,22 @@ fn edit() -> impl Strategy<Value = Edit> {
     ]
 }
 
-fn temp_obj(text: &str, case: u64) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ptui-fuzz-obj-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(format!("case-{case}.obj"));
-    std::fs::write(&path, text).expect("write temp OBJ");
-    path
+/// `text` in a temporary .obj file, removed when the returned guard drops.
+fn temp_obj(text: &str, case: u64) -> tempfile::NamedTempFile {
+    let mut file = tempfile::Builder::new()
+        .prefix(&format!("ptui-fuzz-obj-case-{case}-"))
+        .suffix(".obj")
+        .tempfile()
+        .expect("temp OBJ");
+    std::io::Write::write_all(&mut file, text.as_bytes()).expect("write temp OBJ");
+    file
 }
 
 /// Load `text` as an OBJ file and, if it loads, render it inside a lit scene.
 fn check(text: &str, case: u64) -> Result<(), TestCaseError> {
-    let path = temp_obj(text, case);
-    let loaded = mesh::load_obj(&path, 10_000);
+    let file = temp_obj(text, case);
+    let path = file.path();
+    let loaded = mesh::load_obj(path, 10_000);
     match &loaded {
         Ok(tris) => {
             for t in tris {
@@ -184,7 +187,6 @@ fn check(text: &str, case: u64) -> Result<(), TestCaseError> {
             );
         }
     }
-    let _ = std::fs::remove_file(&path);
     Ok(())
 }
 
@@ -205,8 +207,9 @@ fn next_case() -> u64 {
 
 #[test]
 fn the_unmutated_cube_loads() {
-    let path = temp_obj(CUBE, u64::MAX);
-    let tris = mesh::load_obj(&path, 100).expect("valid cube");
+    let file = temp_obj(CUBE, u64::MAX);
+    let path = file.path();
+    let tris = mesh::load_obj(path, 100).expect("valid cube");
     assert_eq!(tris.len(), 12);
 }
 

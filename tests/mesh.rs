@@ -5,16 +5,16 @@ use ptui::accel::AccelChoice;
 use ptui::render::Renderer;
 use ptui::scene::{self, BuildOptions, SceneError};
 use ptui::settings::{IntegratorKind, RenderSettings, SettingsOverrides};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-/// A fresh directory for one test.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ptui-mesh-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+/// A fresh directory for one test, removed when the returned guard drops.
+fn temp_dir(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("ptui-mesh-{name}-"))
+        .tempdir()
+        .expect("temp dir")
 }
 
 /// Write `scene.toml` with a mesh entry pointing at `obj` (relative) and `obj`'s contents.
@@ -38,9 +38,10 @@ const CUBE_FACE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
 
 #[test]
 fn obj_loads_relative_to_the_scene_file_and_is_triangulated() {
-    let dir = temp_dir("ok");
+    let tmp = temp_dir("ok");
+    let dir = tmp.path();
     std::fs::create_dir_all(dir.join("meshes")).unwrap();
-    let s = scene_with_obj(&dir, "meshes/quad.obj", Some(CUBE_FACE)).expect("loads");
+    let s = scene_with_obj(dir, "meshes/quad.obj", Some(CUBE_FACE)).expect("loads");
     assert_eq!(s.prims.len(), 2, "a quad face is two triangles");
     // scale = 2: the far corner sits at (2, 2, 0).
     let b = s.bounds();
@@ -48,8 +49,9 @@ fn obj_loads_relative_to_the_scene_file_and_is_triangulated() {
 }
 
 fn obj_error(name: &str, obj: Option<&str>) -> String {
-    let dir = temp_dir(name);
-    let err = scene_with_obj(&dir, "m.obj", obj)
+    let tmp = temp_dir(name);
+    let dir = tmp.path();
+    let err = scene_with_obj(dir, "m.obj", obj)
         .err()
         .unwrap_or_else(|| panic!("{name}: expected an error"));
     let text = err.to_string();
@@ -69,9 +71,10 @@ fn obj_error(name: &str, obj: Option<&str>) -> String {
 fn obj_errors_name_the_file_and_the_problem() {
     let missing = obj_error("missing", None);
     assert!(missing.contains("cannot read OBJ file"), "{missing}");
-    let dir = temp_dir("dir");
+    let tmp = temp_dir("dir");
+    let dir = tmp.path();
     std::fs::create_dir_all(dir.join("m.obj")).unwrap();
-    let text = scene_with_obj(&dir, "m.obj", None)
+    let text = scene_with_obj(dir, "m.obj", None)
         .err()
         .unwrap()
         .to_string();
@@ -160,7 +163,8 @@ fn flat_scan_and_bvh_render_identical_images() {
 
 #[test]
 fn scene_without_emitters_renders_the_background_without_nan() {
-    let dir = temp_dir("nolight");
+    let tmp = temp_dir("nolight");
+    let dir = tmp.path();
     let path = dir.join("nolight.toml");
     std::fs::write(
         &path,
