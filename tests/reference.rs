@@ -15,28 +15,33 @@ use std::sync::Arc;
 /// sqrt(ours^2 + REF_NOISE^2).
 const REF_NOISE: f64 = 0.0057;
 
-#[test]
-fn cornell_is_unbiased_against_the_reference() {
+/// The reference and a renderer of cornell for `spp` passes of independent samples (the 1/sqrt(n)
+/// law is the law of independent samples; the default Sobol sampler converges faster, and its
+/// own error test is in tests/convergence.rs).
+fn cornell_against_the_reference(spp: u32, adaptive: bool) -> (reference::LinearImage, Renderer) {
     let path = common::refs_dir().join("cornell.exr");
     let reference = reference::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let scene = Arc::new(scene::load("cornell").expect("built-in"));
     let settings = RenderSettings::merged(&[
         &scene.render,
         &SettingsOverrides {
-            spp: Some(1024),
-            // The 1/sqrt(spp) law is the law of independent samples; the default Sobol sampler
-            // converges faster (its own error test is in tests/convergence.rs).
+            spp: Some(spp),
             sampler: Some(SamplerKind::Independent),
-            // One sample per pixel and pass, so passes are samples (adaptive sampling has its
-            // own test below).
-            adaptive: Some(false),
+            adaptive: Some(adaptive),
             ..Default::default()
         },
     ]);
     reference
         .check_size(settings.width, settings.height)
         .unwrap();
-    let mut r = Renderer::new(scene, settings).expect("settings");
+    (reference, Renderer::new(scene, settings).expect("settings"))
+}
+
+#[test]
+fn cornell_is_unbiased_against_the_reference() {
+    // One sample per pixel and pass, so passes are samples (adaptive sampling has its own test
+    // below).
+    let (reference, mut r) = cornell_against_the_reference(1024, false);
     let mut rows = Vec::new();
     r.render(&AtomicBool::new(false), |r| {
         let spp = r.stats().complete_passes;
@@ -103,20 +108,8 @@ fn cornell_is_unbiased_against_the_reference() {
 /// tracer splats, counting it twice, put the floor by the ball 2.3% bright, 5.5 standard errors).
 #[test]
 fn adaptive_sampling_is_unbiased_and_estimates_its_error() {
-    let path = common::refs_dir().join("cornell.exr");
-    let reference = reference::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    let scene = Arc::new(scene::load("cornell").expect("built-in"));
-    let settings = RenderSettings::merged(&[
-        &scene.render,
-        &SettingsOverrides {
-            spp: Some(96),
-            sampler: Some(SamplerKind::Independent),
-            adaptive: Some(true),
-            ..Default::default()
-        },
-    ]);
-    let (w, h) = (settings.width, settings.height);
-    let mut r = Renderer::new(scene, settings).expect("settings");
+    let (reference, mut r) = cornell_against_the_reference(96, true);
+    let (w, h) = (r.settings.width, r.settings.height);
     r.render(&AtomicBool::new(false), |_| true);
     assert_eq!(r.stats().invalid, 0);
     let map = r.sample_map().expect("adaptive map after the pilot");

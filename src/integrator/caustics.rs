@@ -290,11 +290,15 @@ impl CausticTracer {
         // A fixed-seed pilot, before any sample is taken: the choice does not depend on the
         // render's random numbers, so either way the estimate stays unbiased.
         let mut pilot = PassSplats::default();
+        let mut reached = 0u64;
         for i in 0..PILOT_PATHS {
             let mut rng = Rng::for_sample(SALT, i, u64::MAX);
+            let before = pilot.splats.len();
             tracer.trace(scene, &mut rng, &mut pilot);
+            // A path splats once or twice (first and second diffuse hit): count paths.
+            reached += u64::from(pilot.splats.len() > before);
         }
-        let rate = pilot.splats.len() as f64 / PILOT_PATHS as f64;
+        let rate = reached as f64 / PILOT_PATHS as f64;
         if rate < PILOT_MIN_HIT_RATE {
             return Err(format!(
                 "path-traced (only {:.2}% of {PILOT_PATHS} pilot light paths reach the camera \
