@@ -64,6 +64,11 @@ impl RenderStats {
         }
     }
 
+    /// Camera samples per pixel so far, on average, in an image of `pixels` pixels.
+    pub fn samples_per_pixel(&self, pixels: usize) -> f64 {
+        self.samples as f64 / pixels.max(1) as f64
+    }
+
     pub fn rays_per_second(&self) -> f64 {
         let s = self.elapsed.as_secs_f64();
         if s > 0.0 {
@@ -196,7 +201,7 @@ impl Renderer {
 
     /// Mean samples per pixel so far (valid or not).
     pub fn mean_spp(&self) -> f64 {
-        self.stats.samples as f64 / self.settings.pixels().max(1) as f64
+        self.stats.samples_per_pixel(self.settings.pixels())
     }
 
     /// Whether the target sample count or the target error has been reached.

@@ -55,6 +55,22 @@ pub fn next_ray(
     true
 }
 
+/// The BSDF sample of `material` at `hit` for outgoing `wo`, its numbers drawn from `sampler`: the
+/// lobe choice and the direction are drawn only if the material reads them, otherwise their
+/// dimensions are passed over, so every path keeps its numbers whatever it hits.
+#[inline]
+pub fn sample_bsdf(
+    material: &crate::material::Material,
+    hit: &crate::geometry::Hit,
+    wo: DVec3,
+    sampler: &mut Sampler,
+) -> Option<crate::material::BsdfSample> {
+    let (uses_lobe, uses_dir) = material.sample_uses();
+    let u_lobe = sampler.get_1d_if(uses_lobe);
+    let u = sampler.get_2d_if(uses_dir);
+    material.sample(wo, hit.n, u_lobe, u)
+}
+
 /// The roulette's decision for throughput `beta`: the survival probability q the survivor's
 /// weights are divided by (1 before [`RR_START_DEPTH`]), or None when the path ends. For paths
 /// that carry another quantity beside the throughput the roulette is played on (the light

@@ -6,7 +6,7 @@
 //! closest hits at once ([`Scene::intersect_batch`], spheres tested across eight rays per
 //! vector). Same numbers in the same order per path, so the same image bit for bit.
 
-use super::next_ray;
+use super::{next_ray, sample_bsdf};
 use crate::accel::lanes::RayBatch;
 use crate::geometry::Hit;
 use crate::math::{DVec3, Ray};
@@ -62,10 +62,7 @@ impl NaivePath {
             return false;
         }
         let wo = -self.ray.d;
-        let (uses_lobe, uses_dir) = material.sample_uses();
-        let u_lobe = sampler.get_1d_if(uses_lobe);
-        let u = sampler.get_2d_if(uses_dir);
-        let Some(bs) = material.sample(wo, hit.n, u_lobe, u) else {
+        let Some(bs) = sample_bsdf(material, hit, wo, sampler) else {
             return false;
         };
         self.beta *= bs.weight;

@@ -8,7 +8,7 @@
 //! the emission counts in full.
 
 use super::caustics::{connection_ratio, CausticPass};
-use super::next_ray;
+use super::{next_ray, sample_bsdf};
 use crate::accel::lanes::RayBatch;
 use crate::geometry::{spawn_origin, Hit};
 use crate::light::LightSample;
@@ -220,10 +220,7 @@ impl PathState {
             }
         }
 
-        let (uses_lobe, uses_dir) = material.sample_uses();
-        let u_lobe = sampler.get_1d_if(uses_lobe);
-        let u = sampler.get_2d_if(uses_dir);
-        let Some(bs) = material.sample(wo, hit.n, u_lobe, u) else {
+        let Some(bs) = sample_bsdf(material, hit, wo, sampler) else {
             return false;
         };
         self.beta *= bs.weight;

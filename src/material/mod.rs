@@ -129,7 +129,6 @@ impl Material {
         }
     }
 
-    /// f cos and pdf for a pair of directions; zero for delta materials.
     /// An upper bound on [`Material::eval`]'s `f_cos` over all directions, per channel, up to
     /// the rounding of the cosine (a unit vector's dot product with itself can be 1 + 1 ulp).
     #[inline]
@@ -140,6 +139,7 @@ impl Material {
         }
     }
 
+    /// f cos and pdf for a pair of directions; zero for delta materials.
     #[inline]
     pub fn eval(&self, wo: DVec3, wi: DVec3, n: DVec3) -> BsdfEval {
         match self.kind {

@@ -235,8 +235,9 @@ pub fn fmt_duration(secs: f64) -> String {
 
 /// With adaptive sampling, the samples per pixel the passes came to on average.
 fn mean_spp(snap: &Snapshot) -> String {
-    let pixels = (snap.width as f64 * snap.height as f64).max(1.0);
-    let mean = snap.stats.samples as f64 / pixels;
+    let mean = snap
+        .stats
+        .samples_per_pixel(snap.width as usize * snap.height as usize);
     if snap.samples_per_pass > 1.0 {
         format!(" ({mean:.1}/px)")
     } else {
