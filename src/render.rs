@@ -253,11 +253,7 @@ impl Renderer {
         self.stats.light_rays += splats.rays;
         self.stats.light_paths += splats.paths;
         let splats = &splats;
-        let caustics = self.caustics.as_ref().map(|tracer| CausticPass {
-            tracer,
-            vertices: &splats.vertices,
-            light_paths: splats.paths,
-        });
+        let caustics = self.caustics.as_ref().map(|tracer| splats.pass(tracer));
         let film = &mut self.film;
         self.pool.install(|| {
             film.par_bands(band_rows).for_each(|mut band| {
@@ -515,15 +511,10 @@ mod tests {
                     (17, Some(&map)),
                 ] {
                     let splats = tracer.as_ref().map(|t| t.trace_pass(&scene, 5, pass));
-                    let caustics =
-                        tracer
-                            .as_ref()
-                            .zip(splats.as_ref())
-                            .map(|(tracer, s)| CausticPass {
-                                tracer,
-                                vertices: &s.vertices,
-                                light_paths: s.paths,
-                            });
+                    let caustics = tracer
+                        .as_ref()
+                        .zip(splats.as_ref())
+                        .map(|(tracer, s)| s.pass(tracer));
                     for y in [0, 13, 29] {
                         sample_row(
                             &scene,

@@ -19,6 +19,14 @@
 //! used only when all delta materials sit on spheres (a mirror mesh turns it off, as does a depth
 //! limit, which the split would have to count against).
 //!
+//! Where a caustic is seen after a bounce the camera paths and joins share it by MIS: camera
+//! vertices join one of the pass's light-path ends, the first diffuse hit y (light -> chain ->
+//! y -> x) or the second one x' (light -> chain -> y -> chain -> x' -> x: on `cornell-small-light`
+//! the floor's caustic through the glass ball again, seen after a bounce, 97% of its squared
+//! error as fireflies of 900 before these joins). A pass keeps at most
+//! [`VERTICES_PER_PATH`] ends per light path, a uniform sample per chunk, and a join picks among
+//! all the ends left, kept or not, with equal probability.
+//!
 //! Each pass traces [`LIGHT_PATHS_PER_PIXEL`] x pixels light paths with their own random streams
 //! and adds the splats landing in a pixel to that pixel's camera sample of the same pass: every
 //! pass stays one independent, unbiased sample per pixel, so the film's means, variances and
@@ -51,6 +59,9 @@ const MAX_TARGETS: usize = 16;
 
 /// Salt separating the light paths' random streams from the camera paths'.
 const SALT: u64 = 0x6c69_6768_7470_6174;
+
+/// Salt of the reservoirs' streams, which choose the vertices kept.
+const RESERVOIR_SALT: u64 = 0x7265_7365_7276_6f69;
 
 /// Light paths of the pilot run that decides whether the tracer is worth having.
 const PILOT_PATHS: u64 = 4096;
@@ -117,8 +128,8 @@ pub struct CausticVertex {
 }
 
 /// A unit vector in 32 bits: the octahedral map (Meyer et al. 2010) quantised to 16 bits per
-/// coordinate, within 1e-4 radians. Keeps a vertex at 56 bytes, so a pass's vertices and splats
-/// stay within 8.0 bytes per pixel however many light paths end on a diffuse surface.
+/// coordinate, within 1e-4 radians. Keeps a vertex at 56 bytes (see [`VERTICES_PER_PATH`] for
+/// the pass's budget).
 pub fn encode_unit(v: DVec3) -> u32 {
     let l1 = v.x.abs() + v.y.abs() + v.z.abs();
     let (mut x, mut y) = (v.x / l1, v.y / l1);
@@ -158,12 +169,31 @@ impl CausticVertex {
     }
 }
 
-/// One pass's splats, sorted by pixel, its caustic vertices in path order, and the rays traced
+/// At most this many caustic vertices are kept per light path of a chunk (a path leaves up to
+/// two: its first diffuse hit and the second one after a specular chain). A join picks one
+/// vertex of the pass with probability 1 / (vertices left) whether or not they were all kept
+/// (see [`CausticPass::pick`]), so the cap costs nothing in expectation; it bounds the pass's
+/// state: 0.1 light paths per pixel x (2 splats x 16 bytes + 0.8 x 56 bytes) = 7.7 bytes per
+/// pixel, 63.9 with the film and the adaptive map. Measured on cornell (1.32 vertices per
+/// light path before the cap) in the README.
+pub const VERTICES_PER_PATH: f64 = 0.8;
+
+/// The caustic vertices one chunk of light paths left: how many (`seen`) and where its kept
+/// uniform sample of them starts in [`PassSplats::vertices`] (`kept` of them).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VertexGroup {
+    pub seen: u64,
+    pub start: u32,
+    pub kept: u32,
+}
+
+/// One pass's splats, sorted by pixel, its kept caustic vertices by chunk, and the rays traced
 /// for them.
 #[derive(Debug, Default)]
 pub struct PassSplats {
     pub splats: Vec<Splat>,
     pub vertices: Vec<CausticVertex>,
+    pub groups: Vec<VertexGroup>,
     pub rays: u64,
     pub paths: u64,
 }
@@ -175,6 +205,59 @@ impl PassSplats {
         let b = self.splats.partition_point(|s| s.0 < end);
         &self.splats[a..b]
     }
+
+    /// What the camera paths of this pass take from it.
+    pub fn pass<'a>(&'a self, tracer: &'a CausticTracer) -> CausticPass<'a> {
+        CausticPass {
+            tracer,
+            vertices: &self.vertices,
+            groups: &self.groups,
+            seen: self.groups.iter().map(|g| g.seen).sum(),
+            light_paths: self.paths,
+        }
+    }
+}
+
+/// A uniform sample of at most `cap` of the vertices offered (Vitter's algorithm R), drawn with
+/// its own random stream so the light paths keep theirs.
+struct Reservoir {
+    kept: Vec<CausticVertex>,
+    seen: u64,
+    cap: usize,
+    rng: Rng,
+}
+
+impl Reservoir {
+    fn new(cap: usize, rng: Rng) -> Self {
+        Reservoir {
+            kept: Vec::new(),
+            seen: 0,
+            cap,
+            rng,
+        }
+    }
+
+    /// `out`'s vertices: this reservoir's sample, as one group.
+    fn close(self, out: &mut PassSplats) {
+        out.groups = vec![VertexGroup {
+            seen: self.seen,
+            start: 0,
+            kept: self.kept.len() as u32,
+        }];
+        out.vertices = self.kept;
+    }
+
+    fn offer(&mut self, v: CausticVertex) {
+        self.seen += 1;
+        if self.kept.len() < self.cap {
+            self.kept.push(v);
+        } else {
+            let j = (self.rng.next_f64() * self.seen as f64) as usize;
+            if j < self.cap {
+                self.kept[j] = v;
+            }
+        }
+    }
 }
 
 /// What the camera paths of one pass use from the tracer: which caustics it splats, and its
@@ -182,9 +265,38 @@ impl PassSplats {
 #[derive(Clone, Copy, Debug)]
 pub struct CausticPass<'a> {
     pub tracer: &'a CausticTracer,
+    /// The kept vertices, by chunk ([`VertexGroup`]).
     pub vertices: &'a [CausticVertex],
+    pub groups: &'a [VertexGroup],
+    /// Vertices the pass's light paths left, kept or not.
+    pub seen: u64,
     /// Light paths traced this pass (those that left no vertex included).
     pub light_paths: u64,
+}
+
+impl CausticPass<'_> {
+    /// One of the pass's vertices for the number `u`, each with probability 1 / `seen` over the
+    /// reservoirs' draws: a chunk by its share of the vertices left, then one of its kept ones
+    /// uniformly (kept with probability kept / seen, so kept / seen x seen_chunk / seen x
+    /// 1 / kept = 1 / seen). Returns it and what is left of `u`, uniform again.
+    #[inline]
+    pub fn pick(&self, u: f64) -> Option<(&CausticVertex, f64)> {
+        let mut x = u * self.seen as f64;
+        for g in self.groups {
+            let seen = g.seen as f64;
+            if x < seen || std::ptr::eq(g, self.groups.last()?) {
+                if g.kept == 0 {
+                    return None;
+                }
+                let f = (x / seen).clamp(0.0, 1.0) * g.kept as f64;
+                let k = (f as u32).min(g.kept - 1);
+                let v = self.vertices.get((g.start + k) as usize)?;
+                return Some((v, (f - k as f64).clamp(0.0, 1.0)));
+            }
+            x -= seen;
+        }
+        None
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -291,10 +403,11 @@ impl CausticTracer {
         // render's random numbers, so either way the estimate stays unbiased.
         let mut pilot = PassSplats::default();
         let mut reached = 0u64;
+        let mut unused = Reservoir::new(0, Rng::new(SALT));
         for i in 0..PILOT_PATHS {
             let mut rng = Rng::for_sample(SALT, i, u64::MAX);
             let before = pilot.splats.len();
-            tracer.trace(scene, &mut rng, &mut pilot);
+            tracer.trace(scene, &mut rng, &mut pilot, &mut unused);
             // A path splats once or twice (first and second diffuse hit): count paths.
             reached += u64::from(pilot.splats.len() > before);
         }
@@ -358,24 +471,20 @@ impl CausticTracer {
             .map(|c| {
                 let mut out = PassSplats::default();
                 let end = ((c + 1) * CHUNK).min(self.light_paths);
+                let mut reservoir = Reservoir::new(
+                    ((end - c * CHUNK) as f64 * VERTICES_PER_PATH) as usize,
+                    Rng::for_sample(seed ^ SALT ^ RESERVOIR_SALT, c, pass as u64),
+                );
                 for i in c * CHUNK..end {
                     let mut rng = Rng::for_sample(seed ^ SALT, i, pass as u64);
-                    self.trace(scene, &mut rng, &mut out);
+                    self.trace(scene, &mut rng, &mut out, &mut reservoir);
                     out.paths += 1;
                 }
+                reservoir.close(&mut out);
                 out
             })
             .collect();
-        let mut all = PassSplats::default();
-        for p in parts {
-            all.splats.extend(p.splats);
-            all.vertices.extend(p.vertices);
-            all.rays += p.rays;
-            all.paths += p.paths;
-        }
-        // Stable: splats of one pixel keep the order of their paths, so sums are reproducible.
-        all.splats.sort_by_key(|s| s.0);
-        all
+        merge(parts)
     }
 
     /// The emitter on light `light`, if the tracer starts paths there.
@@ -399,7 +508,7 @@ impl CausticTracer {
     /// first diffuse hit y seen by the camera; then bounce once off y, and if that reaches another
     /// diffuse hit x through one or more specular bounces, splat x too (a caustic of a caustic:
     /// cornell's floor caustic seen through the glass ball from the ceiling and walls).
-    fn trace(&self, scene: &Scene, rng: &mut Rng, out: &mut PassSplats) {
+    fn trace(&self, scene: &Scene, rng: &mut Rng, out: &mut PassSplats, kept: &mut Reservoir) {
         let e = *self.pick_emitter(rng.next_f64());
         let light = &scene.lights.lights[e.light];
         let u = (rng.next_f64(), rng.next_f64());
@@ -424,7 +533,7 @@ impl CausticTracer {
         if !beta.is_finite() {
             return;
         }
-        let p_light = e.pmf * area_pdf * dir_pdf;
+        let mut p_light = e.pmf * area_pdf * dir_pdf;
         // Product over the specular vertices of cos(arrival) / cos(departure), as seen from the
         // light (see `connection_ratio`).
         let mut chain_cos = 1.0;
@@ -446,10 +555,15 @@ impl CausticTracer {
                     return;
                 }
                 self.splat(scene, &hit, wo, beta, out);
-                if past_y {
-                    return;
-                }
                 if self.connect {
+                    // At y the light side of `connection_ratio`; at the second diffuse vertex x
+                    // the same for the join that reaches x from a camera vertex, carried over y
+                    // (see `second_ratio` below) and the chain between.
+                    let light_side = if past_y {
+                        p_light * chain_cos
+                    } else {
+                        p_light * chain_cos / cos0
+                    };
                     let vertex = CausticVertex {
                         p: hit.p,
                         n: encode_unit(hit.n),
@@ -457,14 +571,17 @@ impl CausticTracer {
                         alpha: beta.as_vec3().to_array(),
                         err: hit.err as f32,
                         material: scene.prims[hit.prim as usize].material,
-                        p_light: (p_light * chain_cos / cos0) as f32,
+                        p_light: light_side as f32,
                     };
                     if vertex.alpha.iter().all(|a| a.is_finite())
                         && vertex.p_light.is_finite()
                         && vertex.p_light > 0.0
                     {
-                        out.vertices.push(vertex);
+                        kept.offer(vertex);
                     }
+                }
+                if past_y {
+                    return;
                 }
                 past_y = true;
             }
@@ -476,6 +593,15 @@ impl CausticTracer {
                 chain_cos *= hit.n.dot(wo).abs() / hit.n.dot(bs.wi).abs();
                 run += 1;
             } else {
+                // Leaving y: the join to the next diffuse vertex x is weighed against the camera
+                // path that samples y's bounce the other way (towards the light's chain), so
+                // the light side takes y's forward over its reverse pdf and the cosines of the
+                // two chains at y; the chain to x then starts its own cosine product.
+                let reverse = m.eval(bs.wi, wo, hit.n).pdf;
+                let second_ratio =
+                    hit.n.dot(wo).abs() * bs.pdf / (reverse * hit.n.dot(bs.wi).abs());
+                p_light *= chain_cos / cos0 * second_ratio;
+                chain_cos = 1.0;
                 run = 0;
             }
             let weight = bs.weight * importance_scale(m.kind, wo, bs.wi, hit.n);
@@ -605,6 +731,33 @@ impl CausticTracer {
     }
 }
 
+/// The chunks' splats, sorted by pixel, and their kept vertices, grouped by chunk.
+fn merge(parts: Vec<PassSplats>) -> PassSplats {
+    let mut all = PassSplats::default();
+    for p in parts {
+        all.splats.extend(p.splats);
+        for g in p.groups {
+            all.groups.push(VertexGroup {
+                start: all.vertices.len() as u32,
+                ..g
+            });
+        }
+        all.vertices.extend(p.vertices);
+        all.rays += p.rays;
+        all.paths += p.paths;
+    }
+    // Stable: splats of one pixel keep the order of their paths, so sums are reproducible.
+    all.splats.sort_by_key(|s| s.0);
+    all
+}
+
+/// The same holds for the light path's second diffuse vertex x' (light -> chain -> y -> chain' ->
+/// x'), joined to a camera vertex x: the camera path samples x', then x' towards the chain', then
+/// y towards the light's chain, where the light path sampled y's bounce the other way. With
+/// everything not at y as above, the light side gains y's forward over reverse pdf and the
+/// cosines of the two chains at y (`second_ratio` in `trace`), and K' of the chain': the camera
+/// side has the same form, with x' in y's place (`PathState::chain2_pdf`).
+///
 /// The ratio p_connect / p_camera of the densities with which the two strategies produce the
 /// path camera .. x -> y -> specular chain s_1 .. s_k -> light z: the light tracer's (its start,
 /// the chain, then x joined to y) over the camera path's (x's BSDF towards y, y's BSDF along the
@@ -757,5 +910,82 @@ mod tests {
         }
         assert!(worst < 1e-4, "worst angle {worst:e}");
         assert_eq!(std::mem::size_of::<CausticVertex>(), 56);
+    }
+
+    /// A join picks each vertex the light paths left with probability 1 / seen, whether its
+    /// chunk kept it or not: chunks that keep all, some or none of theirs (the last has no
+    /// vertex). Pearson's chi-square over the vertices, normal approximation, 5 sigma.
+    #[test]
+    fn kept_vertices_are_picked_uniformly_over_all_left() {
+        let sizes = [(7u64, 4usize), (3, 3), (12, 5), (2, 1), (0, 2)];
+        let seen: u64 = sizes.iter().map(|s| s.0).sum();
+        let mut counts = vec![0u64; seen as usize];
+        let mut rng = Rng::new(11);
+        let tracer = dummy_tracer();
+        let trials = 220_000;
+        for t in 0..trials {
+            let mut next = 0u32;
+            let parts = sizes
+                .iter()
+                .enumerate()
+                .map(|(c, &(n, cap))| {
+                    let mut r = Reservoir::new(cap, Rng::for_sample(3, c as u64, t));
+                    for _ in 0..n {
+                        // The vertex's number rides in its material field.
+                        r.offer(CausticVertex {
+                            p: DVec3::ZERO,
+                            n: 0,
+                            wo: 0,
+                            alpha: [1.0; 3],
+                            err: 0.0,
+                            material: next,
+                            p_light: 1.0,
+                        });
+                        next += 1;
+                    }
+                    let mut out = PassSplats::default();
+                    r.close(&mut out);
+                    out
+                })
+                .collect();
+            let all = merge(parts);
+            let tracer_free = CausticPass {
+                tracer: &tracer,
+                vertices: &all.vertices,
+                groups: &all.groups,
+                seen,
+                light_paths: 1,
+            };
+            let (v, rest) = tracer_free.pick(rng.next_f64()).expect("a vertex");
+            assert!((0.0..=1.0).contains(&rest));
+            counts[v.material as usize] += 1;
+        }
+        let expected = trials as f64 / seen as f64;
+        let chi2: f64 = counts
+            .iter()
+            .map(|&c| (c as f64 - expected).powi(2) / expected)
+            .sum();
+        let dof = (seen - 1) as f64;
+        let z = (chi2 - dof) / (2.0 * dof).sqrt();
+        assert!(
+            z < 5.0,
+            "chi2 {chi2:.1} on {dof} dof (z {z:.2}): {counts:?}"
+        );
+    }
+
+    fn dummy_tracer() -> CausticTracer {
+        CausticTracer {
+            emitters: Vec::new(),
+            emitter_of: Vec::new(),
+            targets: Vec::new(),
+            camera: crate::scene::load("cornell").expect("built-in").camera,
+            width: 1,
+            height: 1,
+            light_paths: 1,
+            pixel_norm: 1.0,
+            pilot_rate: 0.0,
+            connect: true,
+            connect_threshold: 0.0,
+        }
     }
 }

@@ -117,6 +117,13 @@ struct PathState {
     /// cos_y / d^2 and, once y's bounce is sampled, times y's BSDF pdf; kept through the
     /// specular chain after y to weigh a light found at its end against the connection strategy.
     chain_pdf: Option<f64>,
+    /// The same one chain further: at a non-delta vertex y reached from such an x through one or
+    /// more delta bounces, x's `chain_pdf` times cos_y, then y's BSDF pdf over its reverse pdf,
+    /// and through the second specular chain after y: weighs a light found at its end against
+    /// joining the vertex before x to x, a light path's second diffuse vertex (the caustic of a
+    /// caustic seen after a bounce: cornell's ceiling lit by the floor's caustic through the
+    /// glass ball, seen from the walls).
+    chain2_pdf: Option<f64>,
 }
 
 impl PathState {
@@ -134,6 +141,7 @@ impl PathState {
             at_first: false,
             delta_run: 0,
             chain_pdf: None,
+            chain2_pdf: None,
         }
     }
 
@@ -156,7 +164,7 @@ impl PathState {
         };
         let ray = self.ray;
         let nee = scene.has_lights();
-        let connect = caustics.filter(|c| !c.vertices.is_empty() && c.light_paths > 0);
+        let connect = caustics.filter(|c| c.seen > 0 && c.light_paths > 0);
         let material = scene.material(hit);
         let prim = &scene.prims[hit.prim as usize];
 
@@ -168,7 +176,7 @@ impl PathState {
         let traced = self.caustic_end && covered;
         if material.is_emissive() && !traced {
             let weight = if self.specular || !nee {
-                match (connect, self.chain_pdf, prim.light) {
+                match (connect, self.chain_pdf.or(self.chain2_pdf), prim.light) {
                     (Some(c), Some(pdf), Some(light)) if covered => {
                         let cos_z = hit.n.dot(ray.d).abs();
                         let p_light = c.tracer.light_pdf(light, hit.p, -ray.d);
@@ -195,9 +203,16 @@ impl PathState {
             let second = self.caustic_end && self.at_first && self.delta_run > 0;
             self.at_first = self.depth == 0;
             self.caustic_end = self.at_first || second;
+            let cos_in = hit.n.dot(ray.d).abs();
+            // chain_pdf is still x's here only if every vertex since x was a delta bounce.
+            self.chain2_pdf = if self.delta_run > 0 {
+                self.chain_pdf.map(|p| p * cos_in)
+            } else {
+                None
+            };
             self.delta_run = 0;
-            self.chain_pdf = (!self.specular)
-                .then(|| self.prev_pdf_bsdf * hit.n.dot(ray.d).abs() / (hit.t * hit.t));
+            self.chain_pdf =
+                (!self.specular).then(|| self.prev_pdf_bsdf * cos_in / (hit.t * hit.t));
         }
         if self.depth >= max_depth {
             return false;
@@ -224,12 +239,20 @@ impl PathState {
             return false;
         };
         self.beta *= bs.weight;
+        let (cos_in, cos_out) = (hit.n.dot(wo).abs(), hit.n.dot(bs.wi).abs());
         self.chain_pdf = self.chain_pdf.map(|p| {
-            let (cos_in, cos_out) = (hit.n.dot(wo).abs(), hit.n.dot(bs.wi).abs());
             if material.is_delta() {
                 p * cos_in / cos_out
             } else {
                 p * bs.pdf / cos_out
+            }
+        });
+        self.chain2_pdf = self.chain2_pdf.map(|p| {
+            if material.is_delta() {
+                p * cos_in / cos_out
+            } else {
+                // The light path sampled this bounce the other way: its pdf is the reverse one.
+                p * bs.pdf / (material.eval(bs.wi, wo, hit.n).pdf * cos_out)
             }
         });
         self.specular = bs.delta;
@@ -335,11 +358,8 @@ fn connect_caustic(
     u: f64,
     beta: DVec3,
 ) -> Option<Shadow> {
-    let m = c.vertices.len();
-    let k = ((u * m as f64) as usize).min(m - 1);
-    // What is left of u once it has chosen k is uniform again: the roulette's number.
-    let u_rr = (u * m as f64 - k as f64).clamp(0.0, 1.0);
-    let v = &c.vertices[k];
+    // What is left of u once it has chosen the vertex is uniform again: the roulette's number.
+    let (v, u_rr) = c.pick(u)?;
     let to = v.p - hit.p;
     let d2 = to.length_squared();
     let d = d2.sqrt();
@@ -347,7 +367,7 @@ fn connect_caustic(
         return None;
     }
     let my = &scene.materials[v.material as usize];
-    let share = m as f64 / c.light_paths as f64;
+    let share = c.seen as f64 / c.light_paths as f64;
     // Most joins lose the roulette below. Play it first against a bound on their worth (each
     // f cos at its largest, the MIS weight 1; widened past any rounding), so those end before
     // their directions are decoded and their BSDFs evaluated: a join this bound rejects, the
