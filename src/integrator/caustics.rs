@@ -533,10 +533,7 @@ impl CausticTracer {
         if !beta.is_finite() {
             return;
         }
-        let mut p_light = e.pmf * area_pdf * dir_pdf;
-        // Product over the specular vertices of cos(arrival) / cos(departure), as seen from the
-        // light (see `connection_ratio`).
-        let mut chain_cos = 1.0;
+        let mut side = LightSide::new(e.pmf * area_pdf * dir_pdf, cos0);
         let mut ray = Ray::new(spawn_origin(y0, n0, err0, w), w);
         let mut bounces = 0u32;
         // Specular bounces since the light or the diffuse vertex y, and whether y is behind.
@@ -556,14 +553,6 @@ impl CausticTracer {
                 }
                 self.splat(scene, &hit, wo, beta, out);
                 if self.connect {
-                    // At y the light side of `connection_ratio`; at the second diffuse vertex x
-                    // the same for the join that reaches x from a camera vertex, carried over y
-                    // (see `second_ratio` below) and the chain between.
-                    let light_side = if past_y {
-                        p_light * chain_cos
-                    } else {
-                        p_light * chain_cos / cos0
-                    };
                     let vertex = CausticVertex {
                         p: hit.p,
                         n: encode_unit(hit.n),
@@ -571,7 +560,7 @@ impl CausticTracer {
                         alpha: beta.as_vec3().to_array(),
                         err: hit.err as f32,
                         material: scene.prims[hit.prim as usize].material,
-                        p_light: light_side as f32,
+                        p_light: side.here() as f32,
                     };
                     if vertex.alpha.iter().all(|a| a.is_finite())
                         && vertex.p_light.is_finite()
@@ -589,19 +578,12 @@ impl CausticTracer {
             else {
                 return;
             };
+            let (cos_in, cos_out) = (hit.n.dot(wo).abs(), hit.n.dot(bs.wi).abs());
             if m.is_delta() {
-                chain_cos *= hit.n.dot(wo).abs() / hit.n.dot(bs.wi).abs();
+                side.specular(cos_in, cos_out);
                 run += 1;
             } else {
-                // Leaving y: the join to the next diffuse vertex x is weighed against the camera
-                // path that samples y's bounce the other way (towards the light's chain), so
-                // the light side takes y's forward over its reverse pdf and the cosines of the
-                // two chains at y; the chain to x then starts its own cosine product.
-                let reverse = m.eval(bs.wi, wo, hit.n).pdf;
-                let second_ratio =
-                    hit.n.dot(wo).abs() * bs.pdf / (reverse * hit.n.dot(bs.wi).abs());
-                p_light *= chain_cos / cos0 * second_ratio;
-                chain_cos = 1.0;
+                side.leave_y(cos_in, bs.pdf, m.eval(bs.wi, wo, hit.n).pdf, cos_out);
                 run = 0;
             }
             let weight = bs.weight * importance_scale(m.kind, wo, bs.wi, hit.n);
@@ -751,12 +733,64 @@ fn merge(parts: Vec<PassSplats>) -> PassSplats {
     all
 }
 
+/// The light side of [`connection_ratio`] along a light path: the start's density, the cosine
+/// products of the specular chains, and at the first diffuse vertex y the turn towards the
+/// chain to the second one.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LightSide {
+    /// The start's density (emitter pmf x area pdf x direction pdf); after y, times what the
+    /// first chain and y contribute.
+    p: f64,
+    cos0: f64,
+    /// Product over the current chain's specular vertices of cos(arrival) / cos(departure), as
+    /// seen from the light.
+    chain_cos: f64,
+    past_y: bool,
+}
+
+impl LightSide {
+    pub(crate) fn new(p_start: f64, cos0: f64) -> Self {
+        LightSide {
+            p: p_start,
+            cos0,
+            chain_cos: 1.0,
+            past_y: false,
+        }
+    }
+
+    /// A specular bounce, its cosines on the light's way in and out.
+    pub(crate) fn specular(&mut self, cos_arrival: f64, cos_departure: f64) {
+        self.chain_cos *= cos_arrival / cos_departure;
+    }
+
+    /// The ratio's light side for a join to the diffuse vertex the path has reached.
+    pub(crate) fn here(&self) -> f64 {
+        if self.past_y {
+            self.p * self.chain_cos
+        } else {
+            self.p * self.chain_cos / self.cos0
+        }
+    }
+
+    /// Leaving y along a direction sampled with `pdf` (`reverse` the other way, as a camera
+    /// path samples it): the join to the next diffuse vertex is weighed against the camera path
+    /// that samples y's bounce towards the light's chain, so the light side takes y's forward
+    /// over reverse pdf and the cosines of the two chains at y; the next chain starts its own
+    /// cosine product.
+    pub(crate) fn leave_y(&mut self, cos_in: f64, pdf: f64, reverse: f64, cos_out: f64) {
+        let turn = cos_in * pdf / (reverse * cos_out);
+        self.p *= self.chain_cos / self.cos0 * turn;
+        self.chain_cos = 1.0;
+        self.past_y = true;
+    }
+}
+
 /// The same holds for the light path's second diffuse vertex x' (light -> chain -> y -> chain' ->
 /// x'), joined to a camera vertex x: the camera path samples x', then x' towards the chain', then
 /// y towards the light's chain, where the light path sampled y's bounce the other way. With
 /// everything not at y as above, the light side gains y's forward over reverse pdf and the
-/// cosines of the two chains at y (`second_ratio` in `trace`), and K' of the chain': the camera
-/// side has the same form, with x' in y's place (`PathState::chain2_pdf`).
+/// cosines of the two chains at y ([`LightSide::leave_y`]), and K' of the chain': the camera
+/// side has the same form, with x' in y's place (`path::Chains`).
 ///
 /// The ratio p_connect / p_camera of the densities with which the two strategies produce the
 /// path camera .. x -> y -> specular chain s_1 .. s_k -> light z: the light tracer's (its start,

@@ -113,17 +113,74 @@ struct PathState {
     caustic_end: bool,
     at_first: bool,
     delta_run: u32,
+    /// The camera side of the MIS ratio against joins, for a light found at the end of a
+    /// specular chain.
+    chains: Chains,
+}
+
+/// The camera side of [`connection_ratio`] (its denominator, but for the light's cosine), kept
+/// through the specular chains that may end at a light.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Chains {
     /// At a non-delta vertex y reached straight from a non-delta x: x's BSDF pdf times
-    /// cos_y / d^2 and, once y's bounce is sampled, times y's BSDF pdf; kept through the
-    /// specular chain after y to weigh a light found at its end against the connection strategy.
-    chain_pdf: Option<f64>,
-    /// The same one chain further: at a non-delta vertex y reached from such an x through one or
-    /// more delta bounces, x's `chain_pdf` times cos_y, then y's BSDF pdf over its reverse pdf,
-    /// and through the second specular chain after y: weighs a light found at its end against
-    /// joining the vertex before x to x, a light path's second diffuse vertex (the caustic of a
-    /// caustic seen after a bounce: cornell's ceiling lit by the floor's caustic through the
-    /// glass ball, seen from the walls).
-    chain2_pdf: Option<f64>,
+    /// cos_y / d^2 and, once y's bounce is sampled, times y's BSDF pdf over cos_out; through
+    /// the specular chain after y, cos_in / cos_out per bounce: weighs a light found at its end
+    /// against joining x to y, a light path's first diffuse vertex.
+    first: Option<f64>,
+    /// The same one chain further: at a non-delta vertex y reached from such an x through one
+    /// or more delta bounces, x's `first` times cos_y, then y's BSDF pdf over its reverse pdf
+    /// (the light path samples y's bounce the other way) over cos_out, and through the second
+    /// specular chain: weighs a light found at its end against joining the vertex before x to
+    /// x, a light path's second diffuse vertex (the caustic of a caustic seen after a bounce:
+    /// the floor's caustic through the glass ball, seen from the walls after a bounce).
+    second: Option<f64>,
+}
+
+impl Chains {
+    /// At a non-delta vertex, `delta_run` delta bounces after the last one; `specular` whether
+    /// the bounce that reached it was a delta one, `prev_pdf` that bounce's pdf, `cos_in` and
+    /// `t` the angle and length of the ray that reached it.
+    pub(crate) fn at_surface(
+        &mut self,
+        delta_run: u32,
+        specular: bool,
+        prev_pdf: f64,
+        cos_in: f64,
+        t: f64,
+    ) {
+        // `first` is still x's here only if every vertex since x was a delta bounce.
+        self.second = if delta_run > 0 {
+            self.first.map(|p| p * cos_in)
+        } else {
+            None
+        };
+        self.first = (!specular).then(|| prev_pdf * cos_in / (t * t));
+    }
+
+    /// A bounce with cosines `cos_in` (towards where the path came from) and `cos_out`; for a
+    /// non-delta one its pdf and, lazily, the pdf of the reverse direction.
+    #[inline]
+    pub(crate) fn bounce(
+        &mut self,
+        delta: bool,
+        cos_in: f64,
+        cos_out: f64,
+        pdf: f64,
+        reverse: impl FnOnce() -> f64,
+    ) {
+        if delta {
+            self.first = self.first.map(|p| p * cos_in / cos_out);
+            self.second = self.second.map(|p| p * cos_in / cos_out);
+        } else {
+            self.first = self.first.map(|p| p * pdf / cos_out);
+            self.second = self.second.map(|p| p * pdf / (reverse() * cos_out));
+        }
+    }
+
+    /// The camera side for a light reached along the current chain, if any.
+    pub(crate) fn at_light(&self) -> Option<f64> {
+        self.first.or(self.second)
+    }
 }
 
 impl PathState {
@@ -140,8 +197,7 @@ impl PathState {
             caustic_end: false,
             at_first: false,
             delta_run: 0,
-            chain_pdf: None,
-            chain2_pdf: None,
+            chains: Chains::default(),
         }
     }
 
@@ -176,7 +232,7 @@ impl PathState {
         let traced = self.caustic_end && covered;
         if material.is_emissive() && !traced {
             let weight = if self.specular || !nee {
-                match (connect, self.chain_pdf.or(self.chain2_pdf), prim.light) {
+                match (connect, self.chains.at_light(), prim.light) {
                     (Some(c), Some(pdf), Some(light)) if covered => {
                         let cos_z = hit.n.dot(ray.d).abs();
                         let p_light = c.tracer.light_pdf(light, hit.p, -ray.d);
@@ -203,16 +259,14 @@ impl PathState {
             let second = self.caustic_end && self.at_first && self.delta_run > 0;
             self.at_first = self.depth == 0;
             self.caustic_end = self.at_first || second;
-            let cos_in = hit.n.dot(ray.d).abs();
-            // chain_pdf is still x's here only if every vertex since x was a delta bounce.
-            self.chain2_pdf = if self.delta_run > 0 {
-                self.chain_pdf.map(|p| p * cos_in)
-            } else {
-                None
-            };
+            self.chains.at_surface(
+                self.delta_run,
+                self.specular,
+                self.prev_pdf_bsdf,
+                hit.n.dot(ray.d).abs(),
+                hit.t,
+            );
             self.delta_run = 0;
-            self.chain_pdf =
-                (!self.specular).then(|| self.prev_pdf_bsdf * cos_in / (hit.t * hit.t));
         }
         if self.depth >= max_depth {
             return false;
@@ -239,22 +293,13 @@ impl PathState {
             return false;
         };
         self.beta *= bs.weight;
-        let (cos_in, cos_out) = (hit.n.dot(wo).abs(), hit.n.dot(bs.wi).abs());
-        self.chain_pdf = self.chain_pdf.map(|p| {
-            if material.is_delta() {
-                p * cos_in / cos_out
-            } else {
-                p * bs.pdf / cos_out
-            }
-        });
-        self.chain2_pdf = self.chain2_pdf.map(|p| {
-            if material.is_delta() {
-                p * cos_in / cos_out
-            } else {
-                // The light path sampled this bounce the other way: its pdf is the reverse one.
-                p * bs.pdf / (material.eval(bs.wi, wo, hit.n).pdf * cos_out)
-            }
-        });
+        self.chains.bounce(
+            material.is_delta(),
+            hit.n.dot(wo).abs(),
+            hit.n.dot(bs.wi).abs(),
+            bs.pdf,
+            || material.eval(bs.wi, wo, hit.n).pdf,
+        );
         self.specular = bs.delta;
         self.prev_pdf_bsdf = bs.pdf;
         self.prev_p = hit.p;
@@ -391,7 +436,10 @@ fn connect_caustic(
     let pdf_y = my.eval(-dir, wo_y, n_y).pdf;
     let g_xy = n_y.dot(dir).abs() / d2;
     let cos_y_in = n_y.dot(wo_y).abs();
-    let r = connection_ratio(v.p_light as f64, e_x.pdf * g_xy * pdf_y / cos_y_in);
+    let r = connection_ratio(
+        v.p_light as f64,
+        join_camera_side(e_x.pdf, g_xy, pdf_y, cos_y_in),
+    );
     let w = power_heuristic(r, 1.0);
     if w.is_nan() || w <= 0.0 {
         return None;
@@ -418,6 +466,14 @@ fn connect_caustic(
         target: None,
         value: beta * value,
     })
+}
+
+/// The camera side of [`connection_ratio`] for a join of camera vertex x to a light-path end y:
+/// x's BSDF pdf towards y (`pdf_x`), the geometry at y (cos_y / d^2), y's pdf of leaving along
+/// the light path's chain, over the cosine of that chain at y.
+#[inline]
+pub(crate) fn join_camera_side(pdf_x: f64, g_xy: f64, pdf_y: f64, cos_y_in: f64) -> f64 {
+    pdf_x * g_xy * pdf_y / cos_y_in
 }
 
 /// MIS weight of emission found by BSDF sampling from `prev_p` (pdf `prev_pdf_bsdf`; `prev_side`
@@ -538,5 +594,155 @@ mod stream_tests {
         let size = std::mem::size_of::<(PathState, Sampler, Shadows, bool)>();
         println!("stream entry: {size} bytes");
         assert!(size <= 448, "{size} bytes");
+    }
+}
+
+#[cfg(test)]
+mod mis_tests {
+    use super::*;
+    use crate::integrator::caustics::LightSide;
+    use crate::material::MaterialKind;
+    use crate::sampling::{warp, Rng};
+
+    fn diffuse() -> Material {
+        Material {
+            kind: MaterialKind::Diffuse,
+            color: DVec3::splat(0.8),
+            emission: DVec3::ZERO,
+        }
+    }
+
+    fn random_point(rng: &mut Rng) -> DVec3 {
+        DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 100.0
+    }
+
+    /// A normal on the side of both unit directions `a` and `b`, tilted at random.
+    fn facing(a: DVec3, b: DVec3, rng: &mut Rng) -> DVec3 {
+        let tilt = warp::uniform_sphere((rng.next_f64(), rng.next_f64())) * 0.3;
+        let n = (a + b).normalize() + tilt;
+        let n = n.normalize();
+        if n.dot(a) > 0.01 && n.dot(b) > 0.01 {
+            n
+        } else {
+            (a + b).normalize()
+        }
+    }
+
+    /// For random paths light -> chain -> y -> (chain -> x ->) z, with z joined to y (the first
+    /// end) or to x (the second), the ratio the join computes from the light path
+    /// ([`LightSide`], as `CausticTracer::trace` keeps it) equals the one the camera path
+    /// computes when it finds the light from z ([`Chains`], as `PathState::vertex` keeps it):
+    /// otherwise the two MIS weights would not sum to one. Each side is accumulated in its own
+    /// direction along the path, as the integrators do.
+    #[test]
+    fn join_and_camera_path_weigh_the_same_path_alike() {
+        let m = diffuse();
+        let mut rng = Rng::new(17);
+        let dir = |a: DVec3, b: DVec3| (b - a).normalize();
+        for trial in 0..2000 {
+            let second = trial % 2 == 1;
+            let n_chain = |rng: &mut Rng| 1 + (rng.next_f64() * 3.0) as usize;
+            // Light order: light, a chain, y, [a chain, x], then the camera vertex z and the
+            // vertex before it.
+            let mut pts = vec![random_point(&mut rng)];
+            let mut delta = vec![false];
+            for _ in 0..n_chain(&mut rng) {
+                pts.push(random_point(&mut rng));
+                delta.push(true);
+            }
+            pts.push(random_point(&mut rng));
+            delta.push(false);
+            if second {
+                for _ in 0..n_chain(&mut rng) {
+                    pts.push(random_point(&mut rng));
+                    delta.push(true);
+                }
+                pts.push(random_point(&mut rng));
+                delta.push(false);
+            }
+            let end = pts.len() - 1;
+            pts.push(random_point(&mut rng));
+            pts.push(random_point(&mut rng));
+            let (z, before_z) = (end + 1, end + 2);
+            let normals: Vec<DVec3> = (0..pts.len())
+                .map(|i| {
+                    if i == 0 || delta.get(i) == Some(&true) || i == before_z {
+                        warp::uniform_sphere((rng.next_f64(), rng.next_f64()))
+                    } else {
+                        facing(dir(pts[i], pts[i - 1]), dir(pts[i], pts[i + 1]), &mut rng)
+                    }
+                })
+                .collect();
+            let nl = if normals[0].dot(dir(pts[0], pts[1])) < 0.0 {
+                -normals[0]
+            } else {
+                normals[0]
+            };
+            let cos = |i: usize, d: DVec3| normals[i].dot(d).abs();
+
+            // The light path, from the light to the end it joins.
+            let p_start = 0.37;
+            let mut side = LightSide::new(p_start, nl.dot(dir(pts[0], pts[1])));
+            for i in 1..end {
+                let (wo, wi) = (dir(pts[i], pts[i - 1]), dir(pts[i], pts[i + 1]));
+                if delta[i] {
+                    side.specular(cos(i, wo), cos(i, wi));
+                } else {
+                    let n = normals[i];
+                    let (pdf, rev) = (m.eval(wo, wi, n).pdf, m.eval(wi, wo, n).pdf);
+                    side.leave_y(cos(i, wo), pdf, rev, cos(i, wi));
+                }
+            }
+            let to = pts[end] - pts[z];
+            let d = dir(pts[z], pts[end]);
+            let wo_end = dir(pts[end], pts[end - 1]);
+            let wo_z = dir(pts[z], pts[before_z]);
+            let pdf_z = m.eval(wo_z, d, normals[z]).pdf;
+            let join = connection_ratio(
+                side.here(),
+                join_camera_side(
+                    pdf_z,
+                    cos(end, d) / to.length_squared(),
+                    m.eval(-d, wo_end, normals[end]).pdf,
+                    cos(end, wo_end),
+                ),
+            );
+
+            // The camera path, from z to the light.
+            let mut chains = Chains::default();
+            let mut order: Vec<usize> = (0..=end).rev().collect();
+            order.insert(0, z);
+            let (mut prev_pdf, mut specular, mut run) = (pdf_z, false, 0u32);
+            for w in 1..order.len() {
+                let (here, from) = (order[w], order[w - 1]);
+                let arrive = dir(pts[here], pts[from]);
+                if here == 0 {
+                    let cam = chains.at_light().expect("a chain") * cos(0, arrive);
+                    let camera = connection_ratio(p_start, cam);
+                    let rel = (camera / join - 1.0).abs();
+                    assert!(
+                        rel < 1e-9,
+                        "trial {trial} (second end: {second}): join {join:e}, camera {camera:e}"
+                    );
+                    break;
+                }
+                let leave = dir(pts[here], pts[order[w + 1]]);
+                if delta[here] {
+                    chains.bounce(true, cos(here, arrive), cos(here, leave), 1.0, || 1.0);
+                    specular = true;
+                    run += 1;
+                } else {
+                    let t = (pts[here] - pts[from]).length();
+                    chains.at_surface(run, specular, prev_pdf, cos(here, arrive), t);
+                    let n = normals[here];
+                    let pdf = m.eval(arrive, leave, n).pdf;
+                    chains.bounce(false, cos(here, arrive), cos(here, leave), pdf, || {
+                        m.eval(leave, arrive, n).pdf
+                    });
+                    (prev_pdf, specular, run) = (pdf, false, 0);
+                }
+            }
+            assert!(join.is_finite() && join > 0.0);
+        }
     }
 }
