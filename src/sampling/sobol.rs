@@ -106,7 +106,10 @@ impl PaddedSobol {
     pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
         let replicate = sample & 1;
         PaddedSobol {
-            pixel_seed: mix64(mix64(seed ^ 0x50b0_1c0d_e5ee_d000 ^ replicate) ^ pixel),
+            // The replicate joins after the seed is mixed: XORed into the seed itself, seed
+            // 2's odd samples were seed 3's even ones (renders with seeds 2k and 2k + 1 shared
+            // half their numbers: 32-spp cornell images differed by RMSE 0.012, not 0.059).
+            pixel_seed: mix64(mix64(mix64(seed ^ 0x50b0_1c0d_e5ee_d000) ^ replicate) ^ pixel),
             rev_index: ((sample >> 1) as u32).reverse_bits(),
         }
     }
@@ -210,6 +213,27 @@ mod tests {
                     "seed {seed}: 8x8 cell hit twice in 64 samples"
                 );
                 cells[cx][cy] = true;
+            }
+        }
+    }
+
+    /// No two (seed, replicate) pairs share a scramble: neighbouring seeds' renders must be
+    /// independent (tests compare renders of seeds 1, 2, 3... as independent estimates).
+    #[test]
+    fn seeds_and_replicates_never_share_numbers() {
+        for seed in 0..64u64 {
+            for other in 0..64u64 {
+                for (a, b) in [(0, 1), (1, 0), (0, 0), (1, 1)] {
+                    if seed == other && a == b {
+                        continue;
+                    }
+                    let x = PaddedSobol::new(seed, 7, 2 + a).get_2d(2);
+                    let y = PaddedSobol::new(other, 7, 2 + b).get_2d(2);
+                    assert_ne!(
+                        x, y,
+                        "seed {seed} replicate {a} = seed {other} replicate {b}"
+                    );
+                }
             }
         }
     }
