@@ -270,3 +270,28 @@ fn extreme_scenes_stay_finite_with_light_traced_caustics() {
         eprintln!("{name}: caustics {}", r.caustics_note());
     }
 }
+
+/// Every chunk of light paths that left an end keeps at least one, however small: a chunk whose
+/// ends were all dropped could never be picked by a join, and its share would be lost. A 3x3
+/// image traces one light path per pass (0.8 per path would keep none).
+#[test]
+fn every_chunk_that_left_an_end_keeps_one() {
+    let scene = scene::load("cornell").expect("built-in");
+    let overrides = SettingsOverrides {
+        width: Some(3),
+        height: Some(3),
+        ..Default::default()
+    };
+    let settings = common::settings_for(&scene, &overrides);
+    let tracer = CausticTracer::new(&scene, &settings).expect("tracer");
+    let mut with_ends = 0;
+    for pass in 0..400 {
+        let p = tracer.trace_pass(&scene, 1, pass);
+        assert_eq!(p.paths, 1);
+        for g in &p.groups {
+            assert!(g.seen == 0 || g.kept >= 1, "pass {pass}: {g:?}");
+            with_ends += usize::from(g.seen > 0);
+        }
+    }
+    assert!(with_ends > 100, "only {with_ends} passes left an end");
+}

@@ -471,8 +471,11 @@ impl CausticTracer {
             .map(|c| {
                 let mut out = PassSplats::default();
                 let end = ((c + 1) * CHUNK).min(self.light_paths);
+                // At least one: a chunk whose ends were all dropped could never be picked, and
+                // its share of the joins would be lost (a last chunk of one path, a tiny image).
+                let cap = ((end - c * CHUNK) as f64 * VERTICES_PER_PATH) as usize;
                 let mut reservoir = Reservoir::new(
-                    ((end - c * CHUNK) as f64 * VERTICES_PER_PATH) as usize,
+                    cap.max(1),
                     Rng::for_sample(seed ^ SALT ^ RESERVOIR_SALT, c, pass as u64),
                 );
                 for i in c * CHUNK..end {
