@@ -282,9 +282,11 @@ impl CausticPass<'_> {
     #[inline]
     pub fn pick(&self, u: f64) -> Option<(&CausticVertex, f64)> {
         let mut x = u * self.seen as f64;
-        for g in self.groups {
+        let last = self.groups.len().checked_sub(1)?;
+        for (i, g) in self.groups.iter().enumerate() {
             let seen = g.seen as f64;
-            if x < seen || std::ptr::eq(g, self.groups.last()?) {
+            // The last group also takes what rounding leaves past the end.
+            if x < seen || i == last {
                 if g.kept == 0 {
                     return None;
                 }
@@ -539,9 +541,8 @@ impl CausticTracer {
         let mut side = LightSide::new(e.pmf * area_pdf * dir_pdf, cos0);
         let mut ray = Ray::new(spawn_origin(y0, n0, err0, w), w);
         let mut bounces = 0u32;
-        // Specular bounces since the light or the diffuse vertex y, and whether y is behind.
+        // Specular bounces since the light or the diffuse vertex y.
         let mut run = 0u32;
-        let mut past_y = false;
         let mut throughput = DVec3::ONE;
         loop {
             out.rays += 1;
@@ -572,10 +573,10 @@ impl CausticTracer {
                         kept.offer(vertex);
                     }
                 }
-                if past_y {
+                // The second diffuse vertex ends the path; the first bounces once more.
+                if side.past_y() {
                     return;
                 }
-                past_y = true;
             }
             let Some(bs) = m.sample(wo, hit.n, rng.next_f64(), (rng.next_f64(), rng.next_f64()))
             else {
@@ -764,6 +765,11 @@ impl LightSide {
     /// A specular bounce, its cosines on the light's way in and out.
     pub(crate) fn specular(&mut self, cos_arrival: f64, cos_departure: f64) {
         self.chain_cos *= cos_arrival / cos_departure;
+    }
+
+    /// Whether the path has left its first diffuse vertex y.
+    pub(crate) fn past_y(&self) -> bool {
+        self.past_y
     }
 
     /// The ratio's light side for a join to the diffuse vertex the path has reached.
@@ -986,14 +992,9 @@ mod tests {
                 })
                 .collect();
             let all = merge(parts);
-            let tracer_free = CausticPass {
-                tracer: &tracer,
-                vertices: &all.vertices,
-                groups: &all.groups,
-                seen,
-                light_paths: 1,
-            };
-            let (v, rest) = tracer_free.pick(rng.next_f64()).expect("a vertex");
+            let pass = all.pass(&tracer);
+            assert_eq!(pass.seen, seen);
+            let (v, rest) = pass.pick(rng.next_f64()).expect("a vertex");
             assert!((0.0..=1.0).contains(&rest));
             counts[v.material as usize] += 1;
         }
