@@ -1,11 +1,11 @@
-//! Image output: tonemapped PNG and linear EXR, chosen by extension, written atomically (encode in
-//! memory, write a temporary file beside the target, fsync, rename), so an existing file is never
-//! left truncated and a failed save loses nothing.
+//! Image output: tonemapped PNG and linear EXR, chosen by extension, written atomically (encode
+//! into a temporary file beside the target, fsync, rename), so an existing file is never left
+//! truncated and a failed save loses nothing.
 
 use crate::film::Film;
 use crate::settings::Tonemap;
 use image::{ImageFormat, Rgb32FImage, RgbImage};
-use std::io::{Cursor, Write};
+use std::io::{BufWriter, Cursor, Write};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
@@ -72,21 +72,16 @@ pub fn encode(
     exposure: f64,
     op: Tonemap,
 ) -> Result<Vec<u8>, OutputError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
     let mut bytes = Cursor::new(Vec::new());
-    let result = match ext.as_deref() {
-        Some("png") => {
+    let result = match format(path)? {
+        ImageFormat::Png => {
             to_rgb8(width, height, linear, exposure, op).write_to(&mut bytes, ImageFormat::Png)
         }
-        Some("exr") => {
+        _ => {
             let img = Rgb32FImage::from_raw(width, height, linear.to_vec())
                 .ok_or_else(|| OutputError::Format(path.to_path_buf()))?;
             img.write_to(&mut bytes, ImageFormat::OpenExr)
         }
-        _ => return Err(OutputError::Format(path.to_path_buf())),
     };
     result.map_err(|source| OutputError::Encode {
         path: path.to_path_buf(),
@@ -95,17 +90,123 @@ pub fn encode(
     Ok(bytes.into_inner())
 }
 
-/// Write the film's mean image to `path` (.png or .exr), atomically.
+/// The format `path`'s extension names: PNG or OpenEXR.
+fn format(path: &Path) -> Result<ImageFormat, OutputError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("png") => Ok(ImageFormat::Png),
+        Some("exr") => Ok(ImageFormat::OpenExr),
+        _ => Err(OutputError::Format(path.to_path_buf())),
+    }
+}
+
+/// Write the film's mean image to `path` (.png or .exr), atomically: the same bytes as
+/// [`encode`] of [`Film::mean_rgb_f32`], but read straight from the film and encoded into the
+/// temporary file, so a 3840x2160 save adds to the film's 465 MB at most the PNG's 25 MB of
+/// pixels, not three copies of the image (the f32 copy, the encoder's, the encoded bytes).
 pub fn save_film(path: &Path, film: &Film, exposure: f64, op: Tonemap) -> Result<(), OutputError> {
-    let data = encode(
+    save_pixels(
         path,
-        film.width,
-        film.height,
-        &film.mean_rgb_f32(),
+        (film.width, film.height),
+        |i| film.mean(i).as_vec3().to_array(),
         exposure,
         op,
-    )?;
-    write_atomic(path, &data)
+    )
+}
+
+/// [`save_film`] for linear f32 RGB data (row 0 at the top): the TUI's snapshot.
+pub fn save_linear(
+    path: &Path,
+    width: u32,
+    height: u32,
+    linear: &[f32],
+    exposure: f64,
+    op: Tonemap,
+) -> Result<(), OutputError> {
+    if linear.len() != 3 * width as usize * height as usize {
+        return Err(OutputError::Format(path.to_path_buf()));
+    }
+    save_pixels(
+        path,
+        (width, height),
+        |i| [linear[3 * i], linear[3 * i + 1], linear[3 * i + 2]],
+        exposure,
+        op,
+    )
+}
+
+/// Write the image whose pixel `i` (row-major, row 0 at the top) has linear RGB `pixel(i)`.
+fn save_pixels(
+    path: &Path,
+    (width, height): (u32, u32),
+    pixel: impl Fn(usize) -> [f32; 3] + Sync,
+    exposure: f64,
+    op: Tonemap,
+) -> Result<(), OutputError> {
+    match format(path)? {
+        ImageFormat::Png => {
+            let exposure = exposure as f32;
+            let mut img = RgbImage::new(width, height);
+            for (i, px) in img.pixels_mut().enumerate() {
+                px.0 = display_rgb(pixel(i), exposure, op);
+            }
+            write_image_atomic(path, |w| img.write_to(w, ImageFormat::Png))
+        }
+        _ => {
+            use exr::prelude::{SpecificChannels, Vec2, WritableImage};
+            let size = Vec2(width as usize, height as usize);
+            // image's OpenEXR encoder makes this call over its buffer; here each pixel is read
+            // as the blocks are written, with no f32 copy of the image.
+            let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+                let [r, g, b] = pixel(p.flat_index_for_size(size));
+                (r, g, b)
+            });
+            write_image_atomic(path, |w| {
+                exr::prelude::Image::from_channels(size, channels)
+                    .write()
+                    .to_buffered(w)
+                    .map_err(|e| match e {
+                        exr::error::Error::Io(e) => image::ImageError::IoError(e),
+                        e => image::ImageError::Encoding(image::error::EncodingError::new(
+                            ImageFormat::OpenExr.into(),
+                            e,
+                        )),
+                    })
+            })
+        }
+    }
+}
+
+/// [`write_atomic`] of what `encode` writes, streamed into the temporary file.
+fn write_image_atomic(
+    path: &Path,
+    encode: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> image::ImageResult<()>,
+) -> Result<(), OutputError> {
+    let mut failed = None;
+    let written = write_atomic_with(path, &[], |f, _| {
+        let mut w = BufWriter::new(f);
+        match encode(&mut w) {
+            Ok(()) => {}
+            // The file would not take the bytes (a full disk): a write error, not an encoding one.
+            Err(image::ImageError::IoError(e)) => return Err(e),
+            Err(e) => {
+                let message = e.to_string();
+                failed = Some(e);
+                return Err(std::io::Error::other(message));
+            }
+        }
+        w.flush()
+    });
+    match failed {
+        Some(source) => Err(OutputError::Encode {
+            path: path.to_path_buf(),
+            source,
+        }),
+        None => written,
+    }
 }
 
 /// Write bytes to `path` through a temporary file in the same directory and a rename.
@@ -180,6 +281,8 @@ pub fn write_all_to(w: &mut impl Write, data: &[u8]) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::DVec3;
+    use rayon::prelude::*;
 
     #[test]
     fn tonemap_matches_smallpt() {
@@ -189,6 +292,48 @@ mod tests {
             assert_eq!(encode_8bit(tonemap(x, 1.0, Tonemap::Clamp)), want, "x={x}");
         }
         assert_eq!(encode_8bit(tonemap(f32::NAN, 1.0, Tonemap::Aces)), 0);
+    }
+
+    /// The film saved straight from its means, and its f32 mean image saved as the TUI saves
+    /// its snapshot, both streamed to the file, are byte for byte what encoding that image in
+    /// memory gives, for both formats; an unknown extension is refused before anything is
+    /// written.
+    #[test]
+    fn saving_the_film_matches_encoding_its_mean_image() {
+        let (w, h) = (7u32, 5u32);
+        let mut film = Film::new(w, h);
+        let mut rng = crate::sampling::Rng::new(5);
+        for pass in 0..3 {
+            film.par_bands(2).for_each(|mut band| {
+                let mut rng = crate::sampling::Rng::new(u64::from(band.first_row * 3 + pass));
+                for row in 0..band.rows() {
+                    for x in 0..w {
+                        let v =
+                            DVec3::new(rng.next_f64() * 3.0, rng.next_f64(), rng.next_f64() * 0.01);
+                        band.add(x, row, pass, v);
+                    }
+                }
+            });
+        }
+        let dir = std::env::temp_dir().join(format!("ptui-save-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (name, op) in [("a.png", Tonemap::Aces), ("b.exr", Tonemap::Clamp)] {
+            let path = dir.join(name);
+            let exposure = 1.0 + rng.next_f64();
+            let mean = film.mean_rgb_f32();
+            let want = encode(&path, w, h, &mean, exposure, op).unwrap();
+            save_film(&path, &film, exposure, op).unwrap();
+            assert_eq!(std::fs::read(&path).unwrap(), want, "{name}");
+            save_linear(&path, w, h, &mean, exposure, op).unwrap();
+            assert_eq!(std::fs::read(&path).unwrap(), want, "{name}, from f32");
+        }
+        let bad = dir.join("c.jpg");
+        assert!(matches!(
+            save_film(&bad, &film, 1.0, Tonemap::Clamp),
+            Err(OutputError::Format(_))
+        ));
+        assert!(!bad.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -123,53 +123,59 @@ fn unwritable_output_paths_are_named_before_rendering() {
 }
 
 /// A full disk for real: the child's file size limit (RLIMIT_FSIZE, which binds root too) is
-/// below the PNG's size, with SIGXFSZ ignored so the write fails with EFBIG instead of killing the
-/// process. The existing output keeps its old content and no temporary file is left behind.
+/// below the image's size, with SIGXFSZ ignored so the write fails with EFBIG instead of killing
+/// the process. The existing output keeps its old content and no temporary file is left behind,
+/// for PNG and for EXR (both encoded straight into the temporary file).
 #[test]
 fn full_disk_leaves_the_existing_output_intact() {
-    let dir = scratch("fulldisk");
-    let out = dir.join("render.png");
-    std::fs::write(&out, b"the previous render").unwrap();
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_ptui"));
-    cmd.args(["render", "-q", "--spp", "2", "--size", "64x48", "-o"])
-        .arg(&out);
-    // SAFETY: only async-signal-safe calls (signal, setrlimit) between fork and exec.
-    unsafe {
-        cmd.pre_exec(|| {
-            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
-            let lim = libc::rlimit {
-                rlim_cur: 100,
-                rlim_max: 100,
-            };
-            if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            Ok(())
-        });
+    for (name, magic) in [
+        ("render.png", &b"\x89PNG"[..]),
+        ("render.exr", &[0x76, 0x2f, 0x31, 0x01][..]),
+    ] {
+        let dir = scratch("fulldisk");
+        let out = dir.join(name);
+        std::fs::write(&out, b"the previous render").unwrap();
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_ptui"));
+        cmd.args(["render", "-q", "--spp", "2", "--size", "64x48", "-o"])
+            .arg(&out);
+        // SAFETY: only async-signal-safe calls (signal, setrlimit) between fork and exec.
+        unsafe {
+            cmd.pre_exec(|| {
+                libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+                let lim = libc::rlimit {
+                    rlim_cur: 100,
+                    rlim_max: 100,
+                };
+                if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+        let o = cmd.output().unwrap();
+        assert_eq!(o.status.code(), Some(1), "{name}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains(&out.display().to_string()) && err.contains("cannot write"),
+            "{name}: {err}"
+        );
+        assert_eq!(std::fs::read(&out).unwrap(), b"the previous render");
+        assert_eq!(files_in(&dir), [name]);
+        // Without the limit the same command replaces the file with the image.
+        let o = ptui(&[
+            "render",
+            "-q",
+            "--spp",
+            "2",
+            "--size",
+            "64x48",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        assert!(std::fs::read(&out).unwrap().starts_with(magic), "{name}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
-    let o = cmd.output().unwrap();
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let err = stderr(&o);
-    assert!(
-        err.contains(&out.display().to_string()) && err.contains("cannot write"),
-        "{err}"
-    );
-    assert_eq!(std::fs::read(&out).unwrap(), b"the previous render");
-    assert_eq!(files_in(&dir), ["render.png"]);
-    // Without the limit the same command replaces the file with a PNG.
-    let o = ptui(&[
-        "render",
-        "-q",
-        "--spp",
-        "2",
-        "--size",
-        "64x48",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(&std::fs::read(&out).unwrap()[1..4], b"PNG");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The same through the library: a writer that takes 100 bytes and then reports ENOSPC.

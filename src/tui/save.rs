@@ -98,10 +98,8 @@ pub fn spawn_save(
         .name("ptui-save".into())
         .spawn(move || {
             let result = std::panic::catch_unwind(|| {
-                let data =
-                    output::encode(&path, snap.width, snap.height, &snap.rgb, exposure, tonemap)
-                        .map_err(|e| e.to_string())?;
-                output::write_atomic(&path, &data).map_err(|e| e.to_string())?;
+                output::save_linear(&path, snap.width, snap.height, &snap.rgb, exposure, tonemap)
+                    .map_err(|e| e.to_string())?;
                 Ok(path.strip_prefix(".").unwrap_or(&path).to_path_buf())
             })
             .unwrap_or_else(|p| Err(super::term::panic_message(&*p)));
