@@ -435,6 +435,7 @@ pub fn sample_row(
             }
         }
     }
+    let caustics = caustics.map(|c| c.for_row(settings.seed, pass, y));
     let plan = &scratch.plan;
     let samples = plan
         .iter()

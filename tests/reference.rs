@@ -128,24 +128,87 @@ fn adaptive_sampling_is_unbiased_and_estimates_its_error() {
         "measured {ours:.5} vs estimated {estimated:.5}"
     );
     let film = r.film();
+    let var: Vec<f64> = (0..(w * h) as usize)
+        .flat_map(|i| film.half_buffer_variance(i).to_array())
+        .collect();
+    let img: Vec<f64> = img.iter().map(|&v| v as f64).collect();
+    assert_regions_match(&img, &var, &reference);
+}
+
+/// Joins on an image large enough for large passes (`CausticTracer::large_passes`: each row
+/// picks its light-path ends a ray ahead, from its own window of them; 640x480 leaves ~40k ends
+/// a pass in 15 chunks, the window is 4k): the render, box-filtered 2x2 down to the reference's
+/// pixels, matches it in the regions the joins light most (the floor's caustic seen through the
+/// glass ball, the ceiling by the lamp) and over the whole image, within 4 standard errors.
+/// (Where a window wraps round past the pass's last end, picks that found nothing put the whole
+/// image 3.4 standard errors dark here; the chi-square test of windowed picks in `caustics.rs`
+/// fails on that outright.)
+#[test]
+fn joins_on_large_passes_are_unbiased() {
+    let path = common::refs_dir().join("cornell.exr");
+    let reference = reference::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let scene = Arc::new(scene::load("cornell").expect("built-in"));
+    let (w, h) = (reference.width, reference.height);
+    let settings = RenderSettings::merged(&[
+        &scene.render,
+        &SettingsOverrides {
+            width: Some(2 * w),
+            height: Some(2 * h),
+            spp: Some(32),
+            sampler: Some(SamplerKind::Independent),
+            adaptive: Some(false),
+            ..Default::default()
+        },
+    ]);
+    let mut r = Renderer::new(scene, settings).expect("settings");
+    r.render(&AtomicBool::new(false), |_| true);
+    assert_eq!(r.stats().invalid, 0);
+    let film = r.film();
+    let fine = film.mean_rgb_f32();
+    // Each reference pixel: the mean of its 2x2 pixels here, and that mean's variance.
+    let n = 3 * (w * h) as usize;
+    let (mut img, mut var) = (vec![0.0f64; n], vec![0.0f64; n]);
+    for y in 0..2 * h {
+        for x in 0..2 * w {
+            let i = (y * 2 * w + x) as usize;
+            let j = ((y / 2) * w + x / 2) as usize;
+            let v = film.half_buffer_variance(i);
+            for c in 0..3 {
+                img[3 * j + c] += fine[3 * i + c] as f64 / 4.0;
+                var[3 * j + c] += v[c] / 16.0;
+            }
+        }
+    }
+    assert_regions_match(&img, &var, &reference);
+}
+
+/// The means of the regions the joins and the adaptive map touch most (the floor's caustic seen
+/// through the glass ball, the ceiling by the lamp) and of the whole image are the reference's
+/// within 4 standard errors: `img` is the image and `var` each pixel mean's variance, per
+/// channel, at the reference's size; the reference's own noise is added.
+fn assert_regions_match(img: &[f64], var: &[f64], reference: &reference::LinearImage) {
+    let (w, h) = (reference.width, reference.height);
     for (name, x0, y0, x1, y1) in [
         ("glass ball bottom", 190, 195, 245, 216),
         ("ceiling by the lamp", 100, 20, 260, 45),
         ("whole image", 0, 0, w, h),
     ] {
         for c in 0..3 {
-            let (mut ours, mut theirs, mut var, mut n) = (0.0, 0.0, 0.0, 0.0);
+            let (mut ours, mut theirs, mut v, mut n) = (0.0, 0.0, 0.0, 0.0);
             for y in y0..y1 {
                 for x in x0..x1 {
-                    let i = (y * w + x) as usize;
-                    ours += img[3 * i + c] as f64;
-                    theirs += reference.data[3 * i + c] as f64;
-                    var += film.half_buffer_variance(i)[c] + REF_NOISE * REF_NOISE;
+                    let j = 3 * (y * w + x) as usize + c;
+                    ours += img[j];
+                    theirs += reference.data[j] as f64;
+                    v += var[j] + REF_NOISE * REF_NOISE;
                     n += 1.0;
                 }
             }
-            let (ours, theirs, se) = (ours / n, theirs / n, var.sqrt() / n);
-            eprintln!("{name}, channel {c}: {ours:.5} vs {theirs:.5} (se {se:.5})");
+            let (ours, theirs, se) = (ours / n, theirs / n, v.sqrt() / n);
+            eprintln!(
+                "{name}, channel {c}: {ours:.5} vs {theirs:.5} (se {se:.5}, {:+.1} se)",
+                (ours - theirs) / se
+            );
             assert!(
                 (ours - theirs).abs() < 4.0 * se,
                 "{name}, channel {c}: mean {ours:.5} vs reference {theirs:.5}, standard error {se:.5}"

@@ -35,7 +35,7 @@ pub fn radiance(
     max_depth: u32,
     caustics: Option<CausticPass>,
 ) -> DVec3 {
-    let mut path = PathState::new(ray);
+    let mut path = PathState::new(ray, sampler, caustics);
     loop {
         sampler.count_ray();
         let hit = scene.intersect(&path.ray, f64::INFINITY);
@@ -116,6 +116,10 @@ struct PathState {
     /// The camera side of the MIS ratio against joins, for a light found at the end of a
     /// specular chain.
     chains: Chains,
+    /// The light-path end the next vertex joins to, if it is a non-delta one: its index in the
+    /// pass and what is left of the number that chose it. Chosen a ray ahead so its load from
+    /// memory runs while the ray is traced ([`CausticPass::prefetch`]).
+    next_join: Option<(u32, f64)>,
 }
 
 /// The camera side of [`connection_ratio`] (its denominator, but for the light's cosine), kept
@@ -184,7 +188,7 @@ impl Chains {
 }
 
 impl PathState {
-    fn new(ray: Ray) -> Self {
+    fn new(ray: Ray, sampler: &mut Sampler, caustics: Option<CausticPass>) -> Self {
         PathState {
             ray,
             l: DVec3::ZERO,
@@ -198,6 +202,7 @@ impl PathState {
             at_first: false,
             delta_run: 0,
             chains: Chains::default(),
+            next_join: pick_ahead(caustics, sampler),
         }
     }
 
@@ -220,7 +225,8 @@ impl PathState {
         };
         let ray = self.ray;
         let nee = scene.has_lights();
-        let connect = caustics.filter(|c| c.seen > 0 && c.light_paths > 0);
+        let connect = joinable(caustics);
+        let join = self.next_join.take();
         let material = scene.material(hit);
         let prim = &scene.prims[hit.prim as usize];
 
@@ -283,9 +289,15 @@ impl PathState {
 
         if let Some(c) = connect {
             let here = !material.is_delta();
-            let u_c = sampler.get_1d_if(here);
-            if here {
-                shadows.join = connect_caustic(scene, hit, wo, material, &c, u_c, self.beta);
+            // Small passes: the end is picked here, its number drawn in this vertex's turn.
+            let join = if c.tracer.large_passes() {
+                join
+            } else {
+                let u = sampler.get_1d_if(here);
+                here.then(|| c.pick_index(u)).flatten()
+            };
+            if let (Some(join), true) = (join, here) {
+                shadows.join = connect_caustic(scene, hit, wo, material, &c, join, self.beta);
             }
         }
 
@@ -305,15 +317,36 @@ impl PathState {
         self.prev_p = hit.p;
         self.prev_side = spawn_origin(hit.p, hit.n, hit.err, wo);
         self.depth += 1;
-        next_ray(
+        let go_on = next_ray(
             &mut self.beta,
             self.depth,
             sampler,
             hit,
             bs.wi,
             &mut self.ray,
-        )
+        );
+        if go_on {
+            self.next_join = pick_ahead(connect, sampler);
+        }
+        go_on
     }
+}
+
+/// The pass's joins, if it left any light-path end to join to.
+#[inline]
+fn joinable(caustics: Option<CausticPass>) -> Option<CausticPass> {
+    caustics.filter(|c| c.seen > 0 && c.light_paths > 0)
+}
+
+/// On large passes (`CausticTracer::large_passes`), choose the end the path's next vertex
+/// joins to and start loading it. Drawn for every ray a path goes on with (the next vertex may
+/// be a delta one that joins nothing), so each path keeps its numbers whatever it hits.
+#[inline]
+fn pick_ahead(caustics: Option<CausticPass>, sampler: &mut Sampler) -> Option<(u32, f64)> {
+    let c = joinable(caustics).filter(|c| c.tracer.large_passes())?;
+    let (k, rest) = c.pick_index(sampler.get_1d())?;
+    c.prefetch(k);
+    Some((k, rest))
 }
 
 /// Scratch space to trace many camera samples side by side; keep one per thread and reuse it.
@@ -339,9 +372,10 @@ impl Stream {
         out: &mut Vec<(DVec3, u32)>,
     ) {
         self.paths.clear();
-        self.paths.extend(
-            samples.map(|(ray, sampler)| (PathState::new(ray), sampler, Shadows::default(), true)),
-        );
+        self.paths.extend(samples.map(|(ray, mut sampler)| {
+            let path = PathState::new(ray, &mut sampler, caustics);
+            (path, sampler, Shadows::default(), true)
+        }));
         self.active.clear();
         self.active.extend(0..self.paths.len() as u32);
         while !self.active.is_empty() {
@@ -388,7 +422,8 @@ impl Stream {
     }
 }
 
-/// Join the non-delta camera vertex `hit` to one of the pass's caustic vertices, chosen by `u`:
+/// Join the non-delta camera vertex `hit` to the pass's caustic vertex `join.0` (`join.1` a
+/// uniform number for the roulette):
 /// f_x G f_y times the light path's weight, over the chance of that light path among the pass's,
 /// weighted by the power heuristic against the camera path that would reach the light from y.
 /// Returns the shadow ray to trace and its value times the throughput `beta`, if the join is
@@ -400,11 +435,10 @@ fn connect_caustic(
     wo: DVec3,
     material: &Material,
     c: &CausticPass,
-    u: f64,
+    (k, u_rr): (u32, f64),
     beta: DVec3,
 ) -> Option<Shadow> {
-    // What is left of u once it has chosen the vertex is uniform again: the roulette's number.
-    let (v, u_rr) = c.pick(u)?;
+    let v = c.vertices.get(k as usize)?;
     let to = v.p - hit.p;
     let d2 = to.length_squared();
     let d = d2.sqrt();
