@@ -4,7 +4,7 @@
 
 use crate::film::Film;
 use crate::settings::Tonemap;
-use image::{ImageFormat, Rgb32FImage, RgbImage};
+use image::{ImageFormat, RgbImage};
 use std::io::{BufWriter, Cursor, Write};
 use std::path::{Path, PathBuf};
 
@@ -53,16 +53,6 @@ pub fn display_rgb(rgb: [f32; 3], exposure: f32, op: Tonemap) -> [u8; 3] {
     rgb.map(|c| encode_8bit(tonemap(c, exposure, op)))
 }
 
-/// The tonemapped 8-bit image of linear f32 RGB data (row 0 at the top).
-pub fn to_rgb8(width: u32, height: u32, linear: &[f32], exposure: f64, op: Tonemap) -> RgbImage {
-    let exposure = exposure as f32;
-    let mut img = RgbImage::new(width, height);
-    for (px, c) in img.pixels_mut().zip(linear.chunks_exact(3)) {
-        px.0 = display_rgb([c[0], c[1], c[2]], exposure, op);
-    }
-    img
-}
-
 /// Encode linear f32 RGB to the format the path's extension names.
 pub fn encode(
     path: &Path,
@@ -72,22 +62,67 @@ pub fn encode(
     exposure: f64,
     op: Tonemap,
 ) -> Result<Vec<u8>, OutputError> {
+    let format = format(path)?;
+    let pixel = linear_pixels(path, (width, height), linear)?;
     let mut bytes = Cursor::new(Vec::new());
-    let result = match format(path)? {
-        ImageFormat::Png => {
-            to_rgb8(width, height, linear, exposure, op).write_to(&mut bytes, ImageFormat::Png)
+    encode_pixels(&mut bytes, format, (width, height), pixel, exposure, op).map_err(|source| {
+        OutputError::Encode {
+            path: path.to_path_buf(),
+            source,
         }
-        _ => {
-            let img = Rgb32FImage::from_raw(width, height, linear.to_vec())
-                .ok_or_else(|| OutputError::Format(path.to_path_buf()))?;
-            img.write_to(&mut bytes, ImageFormat::OpenExr)
-        }
-    };
-    result.map_err(|source| OutputError::Encode {
-        path: path.to_path_buf(),
-        source,
     })?;
     Ok(bytes.into_inner())
+}
+
+/// Pixel `i` of linear f32 RGB data (row 0 at the top), once the data is checked to hold
+/// `width` x `height` of them.
+fn linear_pixels<'a>(
+    path: &Path,
+    (width, height): (u32, u32),
+    linear: &'a [f32],
+) -> Result<impl Fn(usize) -> [f32; 3] + Sync + 'a, OutputError> {
+    if linear.len() != 3 * width as usize * height as usize {
+        return Err(OutputError::Format(path.to_path_buf()));
+    }
+    Ok(|i: usize| [linear[3 * i], linear[3 * i + 1], linear[3 * i + 2]])
+}
+
+/// Write the image whose pixel `i` (row-major, row 0 at the top) has linear RGB `pixel(i)` to
+/// `w` in `format`: PNG tonemapped to 8 bits, EXR linear, each pixel read as it is encoded.
+fn encode_pixels(
+    w: &mut (impl Write + std::io::Seek),
+    format: ImageFormat,
+    (width, height): (u32, u32),
+    pixel: impl Fn(usize) -> [f32; 3] + Sync,
+    exposure: f64,
+    op: Tonemap,
+) -> image::ImageResult<()> {
+    if format == ImageFormat::Png {
+        let exposure = exposure as f32;
+        let mut img = RgbImage::new(width, height);
+        for (i, px) in img.pixels_mut().enumerate() {
+            px.0 = display_rgb(pixel(i), exposure, op);
+        }
+        return img.write_to(w, ImageFormat::Png);
+    }
+    use exr::prelude::{SpecificChannels, Vec2, WritableImage};
+    let size = Vec2(width as usize, height as usize);
+    // image's OpenEXR encoder makes this call over its buffer; here each pixel is read as the
+    // blocks are written, with no f32 copy of the image (same bytes: see the tests).
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let [r, g, b] = pixel(p.flat_index_for_size(size));
+        (r, g, b)
+    });
+    exr::prelude::Image::from_channels(size, channels)
+        .write()
+        .to_buffered(w)
+        .map_err(|e| match e {
+            exr::error::Error::Io(e) => image::ImageError::IoError(e),
+            e => image::ImageError::Encoding(image::error::EncodingError::new(
+                ImageFormat::OpenExr.into(),
+                e,
+            )),
+        })
 }
 
 /// The format `path`'s extension names: PNG or OpenEXR.
@@ -126,58 +161,22 @@ pub fn save_linear(
     exposure: f64,
     op: Tonemap,
 ) -> Result<(), OutputError> {
-    if linear.len() != 3 * width as usize * height as usize {
-        return Err(OutputError::Format(path.to_path_buf()));
-    }
-    save_pixels(
-        path,
-        (width, height),
-        |i| [linear[3 * i], linear[3 * i + 1], linear[3 * i + 2]],
-        exposure,
-        op,
-    )
+    let pixel = linear_pixels(path, (width, height), linear)?;
+    save_pixels(path, (width, height), pixel, exposure, op)
 }
 
-/// Write the image whose pixel `i` (row-major, row 0 at the top) has linear RGB `pixel(i)`.
+/// [`encode_pixels`] into `path`, atomically.
 fn save_pixels(
     path: &Path,
-    (width, height): (u32, u32),
+    size: (u32, u32),
     pixel: impl Fn(usize) -> [f32; 3] + Sync,
     exposure: f64,
     op: Tonemap,
 ) -> Result<(), OutputError> {
-    match format(path)? {
-        ImageFormat::Png => {
-            let exposure = exposure as f32;
-            let mut img = RgbImage::new(width, height);
-            for (i, px) in img.pixels_mut().enumerate() {
-                px.0 = display_rgb(pixel(i), exposure, op);
-            }
-            write_image_atomic(path, |w| img.write_to(w, ImageFormat::Png))
-        }
-        _ => {
-            use exr::prelude::{SpecificChannels, Vec2, WritableImage};
-            let size = Vec2(width as usize, height as usize);
-            // image's OpenEXR encoder makes this call over its buffer; here each pixel is read
-            // as the blocks are written, with no f32 copy of the image.
-            let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
-                let [r, g, b] = pixel(p.flat_index_for_size(size));
-                (r, g, b)
-            });
-            write_image_atomic(path, |w| {
-                exr::prelude::Image::from_channels(size, channels)
-                    .write()
-                    .to_buffered(w)
-                    .map_err(|e| match e {
-                        exr::error::Error::Io(e) => image::ImageError::IoError(e),
-                        e => image::ImageError::Encoding(image::error::EncodingError::new(
-                            ImageFormat::OpenExr.into(),
-                            e,
-                        )),
-                    })
-            })
-        }
-    }
+    let format = format(path)?;
+    write_image_atomic(path, |w| {
+        encode_pixels(w, format, size, pixel, exposure, op)
+    })
 }
 
 /// [`write_atomic`] of what `encode` writes, streamed into the temporary file.
@@ -296,8 +295,8 @@ mod tests {
 
     /// The film saved straight from its means, and its f32 mean image saved as the TUI saves
     /// its snapshot, both streamed to the file, are byte for byte what encoding that image in
-    /// memory gives, for both formats; an unknown extension is refused before anything is
-    /// written.
+    /// memory gives, for both formats, and the EXR what image's own encoder writes; an unknown
+    /// extension is refused before anything is written.
     #[test]
     fn saving_the_film_matches_encoding_its_mean_image() {
         let (w, h) = (7u32, 5u32);
@@ -322,6 +321,15 @@ mod tests {
             let exposure = 1.0 + rng.next_f64();
             let mean = film.mean_rgb_f32();
             let want = encode(&path, w, h, &mean, exposure, op).unwrap();
+            if name.ends_with(".exr") {
+                // The streamed EXR is the bytes image's own encoder writes for the buffer.
+                let mut theirs = Cursor::new(Vec::new());
+                image::Rgb32FImage::from_raw(w, h, mean.clone())
+                    .unwrap()
+                    .write_to(&mut theirs, ImageFormat::OpenExr)
+                    .unwrap();
+                assert_eq!(want, theirs.into_inner());
+            }
             save_film(&path, &film, exposure, op).unwrap();
             assert_eq!(std::fs::read(&path).unwrap(), want, "{name}");
             save_linear(&path, w, h, &mean, exposure, op).unwrap();

@@ -177,7 +177,7 @@ impl CausticVertex {
 /// At most this many caustic vertices are kept per light path of a chunk (a path leaves up to
 /// two: its first diffuse hit and the second one after a specular chain). A join picks one
 /// vertex of the pass with probability 1 / (vertices left) whether or not they were all kept
-/// (see [`CausticPass::pick`]), so the cap costs nothing in expectation; it bounds the pass's
+/// (see [`CausticPass::pick_index`]), so the cap costs nothing in expectation; it bounds the pass's
 /// state: 0.1 light paths per pixel x (2 splats x 16 bytes + 0.8 x 56 bytes) = 7.7 bytes per
 /// pixel, 63.9 with the film and the adaptive map. Measured on cornell (1.32 vertices per
 /// light path before the cap) in the README.
@@ -283,7 +283,7 @@ pub struct CausticPass<'a> {
     pub seen: u64,
     /// Light paths traced this pass (those that left no vertex included).
     pub light_paths: u64,
-    /// The run of vertices left that `pick` draws from, as its start and length in units of
+    /// The run of vertices left that `pick_index` draws from, as its start and length in units of
     /// vertices left (all of them, or a row's window: see [`CausticPass::for_row`]).
     window: (f64, f64),
     /// The chunk holding the window's start.
@@ -331,17 +331,11 @@ impl CausticPass<'_> {
         }
     }
 
-    /// One of the pass's vertices for the number `u`, each with probability 1 / `seen` over the
-    /// reservoirs' draws: a chunk by its share of the vertices left, then one of its kept ones
-    /// uniformly (kept with probability kept / seen, so kept / seen x seen_chunk / seen x
-    /// 1 / kept = 1 / seen). Returns it and what is left of `u`, uniform again.
-    #[inline]
-    pub fn pick(&self, u: f64) -> Option<(&CausticVertex, f64)> {
-        let (k, rest) = self.pick_index(u)?;
-        Some((self.vertices.get(k as usize)?, rest))
-    }
-
-    /// [`CausticPass::pick`] as an index into `vertices`.
+    /// One of the pass's vertices for the number `u`, as its index in `vertices`, each with
+    /// probability 1 / `seen` over the reservoirs' draws: a chunk by its share of the vertices
+    /// left, then one of its kept ones uniformly (kept with probability kept / seen, so
+    /// kept / seen x seen_chunk / seen x 1 / kept = 1 / seen). Returns it and what is left of
+    /// `u`, uniform again.
     #[inline]
     pub fn pick_index(&self, u: f64) -> Option<(u32, f64)> {
         let (start, len) = self.window;
@@ -1081,8 +1075,8 @@ mod tests {
         let (seen, counts) = pick_counts(220_000, |t| {
             let all = reservoir_pass(t);
             let pass = all.pass(&tracer);
-            let (v, rest) = pass.pick(rng.next_f64()).expect("a vertex");
-            (pass.seen, v.material, rest)
+            let (k, rest) = pass.pick_index(rng.next_f64()).expect("a vertex");
+            (pass.seen, pass.vertices[k as usize].material, rest)
         });
         assert_uniform(seen, &counts, 1);
     }
@@ -1098,8 +1092,8 @@ mod tests {
         let (seen, counts) = pick_counts(300_000, |t| {
             let all = reservoir_pass(t);
             let pass = all.pass(&tracer).windowed(rng.next_f64(), 7);
-            let (v, rest) = pass.pick(rng.next_f64()).expect("a vertex");
-            (pass.seen, v.material, rest)
+            let (k, rest) = pass.pick_index(rng.next_f64()).expect("a vertex");
+            (pass.seen, pass.vertices[k as usize].material, rest)
         });
         assert_uniform(seen, &counts, 2);
     }
