@@ -12,15 +12,96 @@
 //! Memory: mean 24 + M2 12 (f32: the variance needs a few digits, not sixteen) + count 4 +
 //! odd-pass mean 12 (f32) + odd count 4 = 56 bytes per pixel, stored as separate arrays so
 //! nothing is padded.
+//!
+//! The mean is a [`MeanImage`] that readers outside the render (the TUI's preview and saves)
+//! share while passes write it, instead of each holding a copy of the image: a 3840x2160 copy
+//! in f32 is 100 MB, a sixth of what the whole render may use.
 
 use crate::math::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
-#[derive(Clone, Debug)]
+/// The film's running mean, readable while a pass writes it. Each channel is an f64's bits in
+/// a relaxed atomic: on x86-64 a relaxed load or store is a plain move, so the render pays
+/// nothing, and a reader never sees a torn value (a pixel read mid-update may have channels one
+/// sample apart, which a preview cannot show and a mid-pass save does not mind).
+pub struct MeanImage {
+    width: u32,
+    height: u32,
+    px: Box<[[AtomicU64; 3]]>,
+}
+
+impl MeanImage {
+    fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        MeanImage {
+            width,
+            height,
+            px: zeroed(n),
+        }
+    }
+
+    /// An image holding `rgb` (f32 RGB, row 0 at the top), for tests and tools.
+    pub fn from_rgb(width: u32, height: u32, rgb: &[f32]) -> Self {
+        let img = MeanImage::new(width, height);
+        for (px, c) in img.px.iter().zip(rgb.chunks_exact(3)) {
+            for k in 0..3 {
+                px[k].store((c[k] as f64).to_bits(), Ordering::Relaxed);
+            }
+        }
+        img
+    }
+
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Pixel i's mean (row-major, row 0 at the top).
+    #[inline]
+    pub fn get(&self, i: usize) -> [f64; 3] {
+        self.px[i]
+            .each_ref()
+            .map(|c| f64::from_bits(c.load(Ordering::Relaxed)))
+    }
+
+    /// Pixel i's mean in f32: what the saved files hold.
+    #[inline]
+    pub fn rgb_f32(&self, i: usize) -> [f32; 3] {
+        self.get(i).map(|c| c as f32)
+    }
+}
+
+/// `n` zeroed pixels, allocated zeroed (calloc) rather than written: the pages stay unmapped
+/// until a pass writes them, like the film's other arrays. Written zeros would add a 3840x2160
+/// image's 200 MB at once, while the film it replaces in the TUI is still alive.
+fn zeroed(n: usize) -> Box<[[AtomicU64; 3]]> {
+    const {
+        assert!(std::mem::align_of::<[AtomicU64; 3]>() == std::mem::align_of::<[u64; 3]>());
+        assert!(std::mem::size_of::<[AtomicU64; 3]>() == std::mem::size_of::<[u64; 3]>());
+    }
+    let zeros: Box<[[u64; 3]]> = vec![[0u64; 3]; n].into_boxed_slice();
+    // SAFETY: AtomicU64 has the size and bit validity of u64 (std's documentation), the same
+    // alignment here (asserted above), and all-zero bits are a valid value of both; the box is
+    // rebuilt with the same length, size and alignment, so it frees as it was allocated.
+    unsafe { Box::from_raw(Box::into_raw(zeros) as *mut [[AtomicU64; 3]]) }
+}
+
+impl std::fmt::Debug for MeanImage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "MeanImage({}x{})", self.width, self.height)
+    }
+}
+
+#[derive(Debug)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
-    mean: Vec<[f64; 3]>,
+    mean: Arc<MeanImage>,
     m2: Vec<[f32; 3]>,
     count: Vec<u32>,
     odd_mean: Vec<[f32; 3]>,
@@ -50,7 +131,7 @@ impl ErrorEstimate {
 pub struct FilmRows<'a> {
     pub first_row: u32,
     pub width: u32,
-    mean: &'a mut [[f64; 3]],
+    mean: &'a [[AtomicU64; 3]],
     m2: &'a mut [[f32; 3]],
     count: &'a mut [u32],
     odd_mean: &'a mut [[f32; 3]],
@@ -65,12 +146,15 @@ impl FilmRows<'_> {
         let i = (row * self.width + x) as usize;
         self.count[i] += 1;
         let n = self.count[i] as f64;
-        let mean = &mut self.mean[i];
+        let cell = &self.mean[i];
         let m2 = &mut self.m2[i];
         for c in 0..3 {
-            let delta = v[c] - mean[c];
-            mean[c] += delta / n;
-            m2[c] += (delta * (v[c] - mean[c])) as f32;
+            // This band's task is the only writer of its pixels: load, update, store.
+            let mean = f64::from_bits(cell[c].load(Ordering::Relaxed));
+            let delta = v[c] - mean;
+            let mean = mean + delta / n;
+            cell[c].store(mean.to_bits(), Ordering::Relaxed);
+            m2[c] += (delta * (v[c] - mean)) as f32;
         }
         if pass % 2 == 1 {
             self.odd_count[i] += 1;
@@ -87,13 +171,34 @@ impl FilmRows<'_> {
     }
 }
 
+impl Clone for Film {
+    /// A copy with its own mean image (the original's readers do not follow the copy).
+    fn clone(&self) -> Self {
+        let mean = MeanImage::new(self.width, self.height);
+        for (to, from) in mean.px.iter().zip(self.mean.px.iter()) {
+            for c in 0..3 {
+                to[c].store(from[c].load(Ordering::Relaxed), Ordering::Relaxed);
+            }
+        }
+        Film {
+            width: self.width,
+            height: self.height,
+            mean: Arc::new(mean),
+            m2: self.m2.clone(),
+            count: self.count.clone(),
+            odd_mean: self.odd_mean.clone(),
+            odd_count: self.odd_count.clone(),
+        }
+    }
+}
+
 impl Film {
     pub fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
         Film {
             width,
             height,
-            mean: vec![[0.0; 3]; n],
+            mean: Arc::new(MeanImage::new(width, height)),
             m2: vec![[0.0; 3]; n],
             count: vec![0; n],
             odd_mean: vec![[0.0; 3]; n],
@@ -111,7 +216,8 @@ impl Film {
         let width = self.width;
         let chunk = (rows * width) as usize;
         self.mean
-            .par_chunks_mut(chunk)
+            .px
+            .par_chunks(chunk)
             .zip(self.m2.par_chunks_mut(chunk))
             .zip(self.count.par_chunks_mut(chunk))
             .zip(self.odd_mean.par_chunks_mut(chunk))
@@ -132,7 +238,12 @@ impl Film {
 
     #[inline]
     pub fn mean(&self, i: usize) -> DVec3 {
-        DVec3::from_array(self.mean[i])
+        DVec3::from_array(self.mean.get(i))
+    }
+
+    /// The mean image itself, shared: it follows the film as passes add samples.
+    pub fn mean_image(&self) -> Arc<MeanImage> {
+        self.mean.clone()
     }
 
     #[inline]
@@ -242,9 +353,9 @@ impl Film {
 
     /// The mean image as linear f32 RGB, row 0 at the top.
     pub fn mean_rgb_f32(&self) -> Vec<f32> {
-        self.mean
-            .par_iter()
-            .flat_map_iter(|m| m.map(|c| c as f32))
+        (0..self.pixels())
+            .into_par_iter()
+            .flat_map_iter(|i| self.mean.rgb_f32(i))
             .collect()
     }
 
@@ -276,6 +387,23 @@ mod tests {
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 3.0;
         assert_eq!(film.mean(0).x, mean);
         assert!((film.variance_of_mean(0).x - var / 4.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_shared_mean_image_follows_the_film_and_a_copy_does_not() {
+        let mut film = Film::new(2, 1);
+        let image = film.mean_image();
+        let add = |film: &mut Film, v: f64| {
+            film.par_bands(1)
+                .for_each(|mut band| band.add(1, 0, 0, DVec3::new(v, 2.0 * v, 0.5)));
+        };
+        add(&mut film, 1.0);
+        let copy = film.clone();
+        add(&mut film, 3.0);
+        assert_eq!(image.get(1), [2.0, 4.0, 0.5]);
+        assert_eq!(image.rgb_f32(0), [0.0; 3]);
+        assert_eq!(copy.mean(1), DVec3::new(1.0, 2.0, 0.5));
+        assert_eq!((image.width(), image.height()), (2, 1));
     }
 
     #[test]

@@ -12,6 +12,7 @@ use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use ratatui::layout::Rect;
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 /// A side effect for the main loop to carry out.
 #[derive(Debug, PartialEq)]
@@ -48,6 +49,8 @@ pub struct App {
     pub show_chart: bool,
     pub view: ViewState,
     pub preview: PreviewCache,
+    /// When the preview was last recomputed and how long that took (for mid-pass refreshes).
+    preview_at: Option<(Instant, Duration)>,
     pub size: Rect,
     /// (render seconds, estimated RMSE) of the current film, for the chart.
     pub history: Vec<(f64, f64)>,
@@ -85,6 +88,7 @@ impl App {
             show_chart: false,
             view: ViewState::default(),
             preview: PreviewCache::default(),
+            preview_at: None,
             size: Rect::new(0, 0, 80, 24),
             history: Vec::new(),
             message: None,
@@ -134,6 +138,7 @@ impl App {
             return;
         };
         let s = self.settings();
+        let started = Instant::now();
         self.preview.update(
             &snap,
             area,
@@ -142,6 +147,26 @@ impl App {
             s.exposure,
             s.tonemap,
         );
+        self.preview_at = Some((started, started.elapsed()));
+    }
+
+    /// Recompute the preview from the film's image as it is now, if the render is running and
+    /// no snapshot came for a while: a pass of a large image takes seconds (8 s at 3840x2160),
+    /// and the image is shared with the render, so the rows it has reached can show before it
+    /// ends. At most every second, and at most 1/40 of the UI thread's time (a 3840x2160
+    /// preview reads 200 MB). Returns whether any sub-pixel changed.
+    pub fn refresh_live(&mut self) -> bool {
+        if self.status() != Some(JobStatus::Running) || self.pending.is_some() {
+            return false;
+        }
+        let due = self
+            .preview_at
+            .is_none_or(|(at, cost)| at.elapsed() >= (cost * 40).max(Duration::from_secs(1)));
+        if !due {
+            return false;
+        }
+        self.refresh_preview(None);
+        self.preview.changed > 0
     }
 
     /// Apply the newest snapshot received since the last frame, if any.
@@ -466,6 +491,53 @@ mod tests {
             ColorMode::Ansi256,
             true,
         )
+    }
+
+    #[test]
+    fn a_running_render_shows_what_a_pass_has_reached_before_it_ends() {
+        let mut app = small_app();
+        use rayon::prelude::*;
+        let mut film = crate::film::Film::new(16, 12);
+        let image = film.mean_image();
+        let snap = |status| {
+            Arc::new(Snapshot {
+                job: 1,
+                image: image.clone(),
+                stats: Default::default(),
+                error: Default::default(),
+                target_spp: 2,
+                samples_per_pass: 1.0,
+                status,
+            })
+        };
+        app.on_worker(WorkerEvent::Progress(snap(JobStatus::Running)));
+        assert!(
+            app.preview.changed > 0,
+            "the first snapshot draws the (black) image"
+        );
+        // A pass reaches the top half of the film; no snapshot is sent before it ends.
+        film.par_bands(6).for_each(|mut band| {
+            if band.first_row == 0 {
+                for (x, row) in (0..16).flat_map(|x| (0..6).map(move |r| (x, r))) {
+                    band.add(x, row, 0, crate::math::DVec3::ONE);
+                }
+            }
+        });
+        assert!(!app.refresh_live(), "at most one refresh a second");
+        let long_ago = Instant::now() - Duration::from_secs(2);
+        app.preview_at = Some((long_ago, Duration::ZERO));
+        assert!(app.refresh_live(), "the shared image shows the pass's rows");
+        let g = app.preview.geometry().expect("a preview");
+        let (changed, all) = (app.preview.changed, g.size.0 as usize * g.size.1 as usize);
+        assert!(
+            changed > 0 && changed < all,
+            "{changed} of {all} sub-pixels"
+        );
+        // A finished or paused render is not refreshed: its image does not move.
+        app.on_worker(WorkerEvent::Progress(snap(JobStatus::Done)));
+        app.apply_pending();
+        app.preview_at = Some((long_ago, Duration::ZERO));
+        assert!(!app.refresh_live());
     }
 
     #[test]

@@ -143,6 +143,7 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                     dirty = true;
                 }
                 Event::Tick => {
+                    dirty |= app.refresh_live();
                     if let Some(log) = bench.as_mut() {
                         if last_log.elapsed() >= Duration::from_secs(1) {
                             last_log = Instant::now();

@@ -1,5 +1,5 @@
 //! The image preview: which film pixels each terminal sub-pixel shows (fit, zoom, pan), a box
-//! filter from the full-resolution film snapshot, the PNG's tonemap, and a per-sub-pixel
+//! filter from the film's full-resolution mean image, the PNG's tonemap, and a per-sub-pixel
 //! hysteresis so a converging image stops sending colour changes.
 //!
 //! In half-block mode a cell shows two sub-pixels ('▀', fg = top, bg = bottom), about square
@@ -147,7 +147,8 @@ impl PreviewCache {
         exposure: f64,
         tonemap: Tonemap,
     ) {
-        let film = (snap.width, snap.height);
+        let image = &*snap.image;
+        let film = (image.width(), image.height());
         let geometry = Geometry::new(film, area, view, halfblock);
         let key = Key {
             area,
@@ -165,7 +166,7 @@ impl PreviewCache {
         }
         self.key = Some(key);
         self.changed = 0;
-        if film.0 == 0 || film.1 == 0 || snap.rgb.len() < film.0 as usize * film.1 as usize * 3 {
+        if film.0 == 0 || film.1 == 0 {
             return;
         }
         let width = film.0 as usize;
@@ -175,8 +176,8 @@ impl PreviewCache {
                 let (x0, x1, y0, y1) = geometry.footprint(i, j, film);
                 let mut sum = [0f32; 3];
                 for y in y0..y1 {
-                    let row = &snap.rgb[(y * width + x0) * 3..(y * width + x1) * 3];
-                    for px in row.chunks_exact(3) {
+                    for i in y * width + x0..y * width + x1 {
+                        let px = image.rgb_f32(i);
                         sum[0] += px[0];
                         sum[1] += px[1];
                         sum[2] += px[2];
@@ -255,9 +256,7 @@ mod tests {
         }
         Snapshot {
             job: 1,
-            width: w,
-            height: h,
-            rgb,
+            image: std::sync::Arc::new(crate::film::MeanImage::from_rgb(w, h, &rgb)),
             stats: RenderStats::default(),
             error: ErrorEstimate::default(),
             target_spp: 1,

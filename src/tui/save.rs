@@ -1,6 +1,9 @@
-//! Saving from the TUI: the full-resolution film snapshot (not the preview) to a PNG (tonemapped
-//! like `ptui render`) or a linear EXR, named after scene, spp and time, encoded and written
-//! atomically on its own thread so the UI never stalls.
+//! Saving from the TUI: the film's full-resolution mean image (not the preview) to a PNG
+//! (tonemapped like `ptui render`) or a linear EXR, named after scene, spp and time, encoded and
+//! written atomically on its own thread so the UI never stalls. The image is the render's own,
+//! read as it is encoded: a save while passes run holds each pixel as it is when read (the rows
+//! a pass has reached have one sample more than the name's spp), a save of a finished or paused
+//! render the film exactly.
 
 use super::event::Event;
 use super::worker::Snapshot;
@@ -98,7 +101,7 @@ pub fn spawn_save(
         .name("ptui-save".into())
         .spawn(move || {
             let result = std::panic::catch_unwind(|| {
-                output::save_linear(&path, snap.width, snap.height, &snap.rgb, exposure, tonemap)
+                output::save_mean(&path, &snap.image, exposure, tonemap)
                     .map_err(|e| e.to_string())?;
                 Ok(path.strip_prefix(".").unwrap_or(&path).to_path_buf())
             })

@@ -237,7 +237,7 @@ pub fn fmt_duration(secs: f64) -> String {
 fn mean_spp(snap: &Snapshot) -> String {
     let mean = snap
         .stats
-        .samples_per_pixel(snap.width as usize * snap.height as usize);
+        .samples_per_pixel(snap.image.width() as usize * snap.image.height() as usize);
     if snap.samples_per_pass > 1.0 {
         format!(" ({mean:.1}/px)")
     } else {
@@ -256,7 +256,7 @@ fn draw_gauge(frame: &mut Frame, app: &App, area: Rect) {
     // Remaining passes at the current sampling rate: with adaptive sampling the passes after the
     // pilot take more samples than the ones so far.
     let rate = snap.stats.samples_per_second();
-    let per_pass = snap.samples_per_pass * snap.width as f64 * snap.height as f64;
+    let per_pass = snap.samples_per_pass * snap.image.width() as f64 * snap.image.height() as f64;
     let eta = match snap.status {
         JobStatus::Running | JobStatus::Paused if done > 0 && rate > 0.0 => {
             fmt_duration(target.saturating_sub(done) as f64 * per_pass / rate)
@@ -473,7 +473,7 @@ fn draw_help(frame: &mut Frame, area: Rect) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::film::ErrorEstimate;
+    use crate::film::{ErrorEstimate, MeanImage};
     use crate::render::RenderStats;
     use crate::settings::SettingsOverrides;
     use crate::tui::color::{ColorChoice, ColorMode};
@@ -521,9 +521,7 @@ mod tests {
         }
         let snap = Snapshot {
             job: 1,
-            width: fw,
-            height: fh,
-            rgb,
+            image: Arc::new(MeanImage::from_rgb(fw, fh, &rgb)),
             stats: RenderStats {
                 passes: 32,
                 complete_passes: 32,
