@@ -479,6 +479,22 @@ mod tests {
         map
     }
 
+    /// The summary says when a render's joins pick from windows (passes whose kept ends exceed
+    /// 1 MiB): cornell at 640x480 keeps ~1.4 MB a pass, at 320x240 a quarter of that.
+    #[test]
+    fn the_caustics_note_says_when_joins_pick_from_windows() {
+        let scene = crate::scene::load("cornell").expect("built-in scene");
+        for (width, height, large) in [(320, 240, false), (640, 480, true)] {
+            let mut settings = RenderSettings::merged(&[&scene.render]);
+            settings.width = width;
+            settings.height = height;
+            let tracer = CausticTracer::new(&scene, &settings).expect("cornell's caustics");
+            let note = tracer.describe();
+            assert_eq!(tracer.large_passes(), large, "{width}x{height}");
+            assert_eq!(note.contains("windows of 4096 ends"), large, "{note}");
+        }
+    }
+
     /// The batched drivers of `path` and `naive` give every sample the bits and the ray count of
     /// the one-path-at-a-time integrators: on sphere scenes (flat scan, 8-ray lanes), a mesh
     /// (BVH), with and without caustic joins, both samplers, a depth limit, one sample per pixel

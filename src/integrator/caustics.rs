@@ -535,8 +535,14 @@ impl CausticTracer {
     /// One line for summaries.
     pub fn describe(&self) -> String {
         let joins = if self.connect {
+            // Large passes change how the joins pick their ends (see `large_passes`).
+            let windows = if self.large_passes() {
+                format!(", picked from windows of {ROW_WINDOW} ends per row")
+            } else {
+                String::new()
+            };
             format!(
-                "their ends joined to camera vertices by MIS, roulette below {:.3}",
+                "their ends joined to camera vertices by MIS, roulette below {:.3}{windows}",
                 self.connect_threshold
             )
         } else {
