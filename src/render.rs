@@ -263,46 +263,37 @@ impl Renderer {
                     .range(first, first + band.rows() * settings.width)
                     .iter()
                     .peekable();
-                let mut scratch = RowScratch::default();
-                let mut values = Vec::with_capacity(settings.width as usize);
-                for row in 0..band.rows() {
-                    if cancel.load(Ordering::Relaxed) {
-                        break;
-                    }
-                    let y = band.first_row + row;
-                    sample_row(
-                        scene,
-                        settings,
-                        y,
-                        pass,
-                        map,
-                        caustics,
-                        &mut scratch,
-                        &mut values,
-                    );
-                    // Each of a pixel's samples of this pass gets the pass's splats: each sum
-                    // is an unbiased estimate (they share the splats' noise, which is why the
-                    // error is then read from the half-buffers, split by pass).
-                    let mut splat = (u32::MAX, DVec3::ZERO);
-                    for (&(x, _), &(v, r)) in scratch.plan.iter().zip(&values) {
-                        let pixel = y * settings.width + x;
-                        if splat.0 != pixel {
-                            splat = (pixel, DVec3::ZERO);
-                            while let Some(s) = band_splats.next_if(|s| s.0 == pixel) {
-                                splat.1 += glam::Vec3::from_array(s.1).as_dvec3();
+                ROW_BUFFERS.with_borrow_mut(|(scratch, values)| {
+                    for row in 0..band.rows() {
+                        if cancel.load(Ordering::Relaxed) {
+                            break;
+                        }
+                        let y = band.first_row + row;
+                        sample_row(scene, settings, y, pass, map, caustics, scratch, values);
+                        // Each of a pixel's samples of this pass gets the pass's splats: each sum
+                        // is an unbiased estimate (they share the splats' noise, which is why the
+                        // error is then read from the half-buffers, split by pass).
+                        let mut splat = (u32::MAX, DVec3::ZERO);
+                        for (&(x, _), &(v, r)) in scratch.plan.iter().zip(values.iter()) {
+                            let pixel = y * settings.width + x;
+                            if splat.0 != pixel {
+                                splat = (pixel, DVec3::ZERO);
+                                while let Some(s) = band_splats.next_if(|s| s.0 == pixel) {
+                                    splat.1 += glam::Vec3::from_array(s.1).as_dvec3();
+                                }
+                            }
+                            let v = v + splat.1;
+                            done += 1;
+                            traced += r as u64;
+                            if v.is_finite() {
+                                band.add(x, row, pass, v);
+                            } else {
+                                bad += 1;
                             }
                         }
-                        let v = v + splat.1;
-                        done += 1;
-                        traced += r as u64;
-                        if v.is_finite() {
-                            band.add(x, row, pass, v);
-                        } else {
-                            bad += 1;
-                        }
+                        rows += 1;
                     }
-                    rows += 1;
-                }
+                });
                 rows_done.fetch_add(rows, Ordering::Relaxed);
                 invalid.fetch_add(bad, Ordering::Relaxed);
                 samples.fetch_add(done, Ordering::Relaxed);
@@ -395,6 +386,15 @@ fn camera_sample(
         y as f64 + jy,
     );
     (ray, sampler)
+}
+
+thread_local! {
+    /// Each render thread's row buffers (path states, ray batches, the row's samples), kept from
+    /// band to band and pass to pass. Fresh ones per band grew by doubling: ~2000 allocations a
+    /// pass whatever the image's size (tests/allocations.rs counts them). A row's path states
+    /// take ~400 bytes per pixel of a row: 128 KB per thread at 320 wide.
+    static ROW_BUFFERS: std::cell::RefCell<(RowScratch, Vec<(DVec3, u32)>)> =
+        std::cell::RefCell::default();
 }
 
 /// Per-thread scratch for [`sample_row`].
