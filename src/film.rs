@@ -61,6 +61,10 @@ impl MeanImage {
         self.height
     }
 
+    pub fn pixels(&self) -> usize {
+        self.px.len()
+    }
+
     /// Pixel i's mean (row-major, row 0 at the top).
     #[inline]
     pub fn get(&self, i: usize) -> [f64; 3] {

@@ -171,8 +171,8 @@ fn format(path: &Path) -> Result<ImageFormat, OutputError> {
 
 /// Write the film's mean image to `path` (.png or .exr), atomically: the same bytes as
 /// [`encode`] of [`Film::mean_rgb_f32`], but read straight from the film and encoded into the
-/// temporary file, so a 3840x2160 save adds to the film's 465 MB at most the PNG's 25 MB of
-/// pixels, not three copies of the image (the f32 copy, the encoder's, the encoded bytes).
+/// temporary file, so a 3840x2160 save adds no copy of the image to the film's 465 MB (it used
+/// to add three: the f32 copy, the encoder's, the encoded bytes).
 pub fn save_film(path: &Path, film: &Film, exposure: f64, op: Tonemap) -> Result<(), OutputError> {
     save_mean(path, &film.mean_image(), exposure, op)
 }
@@ -184,21 +184,10 @@ pub fn save_mean(
     exposure: f64,
     op: Tonemap,
 ) -> Result<(), OutputError> {
-    let size = (image.width(), image.height());
-    save_pixels(path, size, |i| image.rgb_f32(i), exposure, op)
-}
-
-/// [`encode_pixels`] into `path`, atomically.
-fn save_pixels(
-    path: &Path,
-    size: (u32, u32),
-    pixel: impl Fn(usize) -> [f32; 3] + Sync,
-    exposure: f64,
-    op: Tonemap,
-) -> Result<(), OutputError> {
     let format = format(path)?;
+    let size = (image.width(), image.height());
     write_image_atomic(path, |w| {
-        encode_pixels(w, format, size, pixel, exposure, op)
+        encode_pixels(w, format, size, |i| image.rgb_f32(i), exposure, op)
     })
 }
 
@@ -316,8 +305,8 @@ mod tests {
         assert_eq!(encode_8bit(tonemap(f32::NAN, 1.0, Tonemap::Aces)), 0);
     }
 
-    /// The film saved straight from its means, and its f32 mean image saved as the TUI saves
-    /// its snapshot, both streamed to the file, are byte for byte what encoding that image in
+    /// The film saved straight from its means, and a mean image made from its f32 copy (what
+    /// the TUI's saves read), both streamed to the file, are byte for byte what encoding that image in
     /// memory gives, for both formats, and the EXR what image's own encoder writes; an unknown
     /// extension is refused before anything is written.
     #[test]

@@ -235,9 +235,7 @@ pub fn fmt_duration(secs: f64) -> String {
 
 /// With adaptive sampling, the samples per pixel the passes came to on average.
 fn mean_spp(snap: &Snapshot) -> String {
-    let mean = snap
-        .stats
-        .samples_per_pixel(snap.image.width() as usize * snap.image.height() as usize);
+    let mean = snap.stats.samples_per_pixel(snap.image.pixels());
     if snap.samples_per_pass > 1.0 {
         format!(" ({mean:.1}/px)")
     } else {
@@ -256,7 +254,7 @@ fn draw_gauge(frame: &mut Frame, app: &App, area: Rect) {
     // Remaining passes at the current sampling rate: with adaptive sampling the passes after the
     // pilot take more samples than the ones so far.
     let rate = snap.stats.samples_per_second();
-    let per_pass = snap.samples_per_pass * snap.image.width() as f64 * snap.image.height() as f64;
+    let per_pass = snap.samples_per_pass * snap.image.pixels() as f64;
     let eta = match snap.status {
         JobStatus::Running | JobStatus::Paused if done > 0 && rate > 0.0 => {
             fmt_duration(target.saturating_sub(done) as f64 * per_pass / rate)

@@ -4,9 +4,10 @@
 //! The UI talks to it through a command channel plus a shared cancel flag, and hears back on the
 //! UI's one event channel: [`WorkerEvent::Started`] when a request is accepted and throttled
 //! [`Snapshot`]s (the film's counters and error estimate, and its mean image shared by `Arc`:
-//! relaxed atomics, not a copy), so the UI never waits on a lock the render threads hold. The newest request wins: sending one raises the cancel flag, the
-//! running pass stops within a row, its threads are joined (`install` returns only when every
-//! task has), and the worker takes the newest command.
+//! relaxed atomics, not a copy), so the UI never waits on a lock the render threads hold. The
+//! newest request wins: sending one raises the cancel flag, the running pass stops within a row,
+//! its threads are joined (`install` returns only when every task has), and the worker takes the
+//! newest command.
 
 use super::event::Event;
 use crate::film::{ErrorEstimate, MeanImage};
