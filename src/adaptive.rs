@@ -20,8 +20,15 @@
 //! What the map cannot see: it pools whole samples, so pixels whose noise is in the light-traced
 //! splats (one per pass whatever the count) get samples that do not reduce it.
 //!
-//! Memory: one byte per 2x2 block of pixels (the weight, in steps of 1/16): the map is smooth by
-//! construction (pooled over a 10x10 window) and the film's budget is 64 bytes per pixel.
+//! Per pixel, not per block: a block's pixels share a weight, so their ring has to leave out the
+//! whole block, and a bright feature the size of a block is then seen by none of the blocks it
+//! is in. cornell-small-light's light, seen in the mirror ball, is such a feature (2x2 pixels
+//! partly covered, samples of 400): with 2x2 blocks it kept one sample per pass and held a
+//! third of the squared error at 112 passes; per pixel, each of its pixels sees the others.
+//!
+//! Memory: one byte per pixel (the weight, in steps of 1/16), within the budget of 64 bytes per
+//! pixel with the film's 56 and a pass's caustic state (see
+//! [`crate::integrator::caustics::VERTICES_PER_PATH`]).
 
 use crate::film::Film;
 use rayon::prelude::*;
@@ -33,14 +40,12 @@ pub const PILOT_PASSES: u32 = 16;
 /// Most samples a pixel takes per pass.
 pub const MAX_WEIGHT: f64 = 16.0;
 
-/// Pixels per side of a map block.
-const BLOCK: u32 = 2;
-
 /// Weight quantum: weights are 1 + q / 16 for q in 0..=255.
 const STEPS: f64 = 16.0;
 
-/// Pixels of the ring around a block whose pilot samples set its weight. Cornell, MSE x rays at
-/// 96 spp: rings of 1 and 4 pixels 0.000071 and 0.000064 (6, at scale 3: 0.000063, for twice the
+/// Pixels on each side of a pixel whose pilot samples set its weight: a 9x9 window less the
+/// pixel itself. Cornell, MSE x rays at 96 spp (with 2x2 blocks and their 10x10 windows):
+/// rings of 1 and 4 pixels 0.000071 and 0.000064 (6, at scale 3: 0.000063, for twice the
 /// pooling).
 const RING: u32 = 4;
 
@@ -59,8 +64,8 @@ const LAMBDA_FACTOR: f64 = 2.5;
 pub struct SampleMap {
     /// The first pass the map governs (even).
     start: u32,
-    blocks_x: u32,
-    /// Per block: weight 1 + q / STEPS.
+    width: u32,
+    /// Per pixel: weight 1 + q / STEPS.
     weight: Vec<u8>,
     /// Mean samples per pixel and pass under the map.
     mean: f64,
@@ -73,9 +78,13 @@ pub struct SampleMap {
 /// variance would not; but after 16 passes that has one noisy degree of freedom per pixel, and
 /// cornell measured better with Welford's (MSE x rays at 96 spp: 0.000071 vs 0.000074, uniform
 /// 0.000080).
-fn per_sample_variance(film: &Film, i: usize) -> Option<f64> {
+fn per_sample_variance(film: &Film, i: usize) -> f32 {
     let s = film.variance_of_mean(i).element_sum() * film.count(i) as f64;
-    s.is_finite().then_some(s)
+    if s.is_finite() {
+        s as f32
+    } else {
+        f32::NAN
+    }
 }
 
 impl SampleMap {
@@ -83,25 +92,25 @@ impl SampleMap {
     pub fn build(film: &Film, start: u32) -> SampleMap {
         debug_assert!(start.is_multiple_of(2));
         let (w, h) = (film.width, film.height);
-        let (bx, by) = (w.div_ceil(BLOCK), h.div_ceil(BLOCK));
-        let s: Vec<Option<f64>> = (0..film.pixels())
+        // f32, NaN where a pixel has no variance: 4 bytes per pixel while the map is built, when
+        // no pass state is alive (the budget is 64 bytes per pixel with the film's 56).
+        let s: Vec<f32> = (0..film.pixels())
             .into_par_iter()
             .map(|i| per_sample_variance(film, i))
             .collect();
-        // Per block, the pooled per-sample deviation of the ring of pixels around it (the 10x10
-        // window minus the block): none of the block's own samples.
-        let sigma: Vec<f64> = (0..bx * by)
+        // Per pixel, the pooled per-sample deviation of the ring of pixels around it: none of
+        // its own samples.
+        let sigma: Vec<f32> = (0..w * h)
             .into_par_iter()
-            .map(|b| {
-                let (x0, y0) = ((b % bx) * BLOCK, (b / bx) * BLOCK);
-                let (mut sum, mut n) = (0.0, 0u32);
-                for y in y0.saturating_sub(RING)..(y0 + BLOCK + RING).min(h) {
-                    for x in x0.saturating_sub(RING)..(x0 + BLOCK + RING).min(w) {
-                        if (x0..x0 + BLOCK).contains(&x) && (y0..y0 + BLOCK).contains(&y) {
-                            continue;
-                        }
-                        if let Some(v) = s[(y * w + x) as usize] {
-                            sum += v;
+            .map(|i| {
+                let (x0, y0) = (i % w, i / w);
+                let (mut sum, mut n) = (0.0f64, 0u32);
+                for y in y0.saturating_sub(RING)..(y0 + 1 + RING).min(h) {
+                    let row = &s[(y * w) as usize..((y + 1) * w) as usize];
+                    for x in x0.saturating_sub(RING)..(x0 + 1 + RING).min(w) {
+                        let v = row[x as usize];
+                        if (x, y) != (x0, y0) && !v.is_nan() {
+                            sum += v as f64;
                             n += 1;
                         }
                     }
@@ -109,29 +118,28 @@ impl SampleMap {
                 if n == 0 {
                     0.0
                 } else {
-                    (sum / n as f64).sqrt()
+                    (sum / n as f64).sqrt() as f32
                 }
             })
             .collect();
-        // Block sizes at the right and bottom edges, for pixel-weighted sums.
-        let area = |b: usize| {
-            let (x0, y0) = ((b as u32 % bx) * BLOCK, (b as u32 / bx) * BLOCK);
-            (((x0 + BLOCK).min(w) - x0) * ((y0 + BLOCK).min(h) - y0)) as f64
-        };
-        let m = optimal_counts(&sigma, area);
-        let weight: Vec<u8> = m
-            .iter()
-            .map(|&m| ((m - 1.0) * STEPS).round().clamp(0.0, 255.0) as u8)
+        drop(s);
+        // f32 deviations and no f64 copy of the counts: at 3840x2160 every byte per pixel here
+        // is 8 MB on top of the film's 465.
+        let lambda = count_scale(&sigma);
+        let weight: Vec<u8> = sigma
+            .par_iter()
+            .map(|&s| {
+                ((count(s as f64, lambda) - 1.0) * STEPS)
+                    .round()
+                    .clamp(0.0, 255.0) as u8
+            })
             .collect();
-        let total: f64 = weight
-            .iter()
-            .enumerate()
-            .map(|(b, &q)| area(b) * (1.0 + q as f64 / STEPS))
-            .sum();
+        drop(sigma);
+        let total: f64 = weight.iter().map(|&q| 1.0 + q as f64 / STEPS).sum();
         let max = weight.iter().copied().max().unwrap_or(0);
         SampleMap {
             start,
-            blocks_x: bx,
+            width: w,
             weight,
             mean: total / film.pixels().max(1) as f64,
             max: 1.0 + max as f64 / STEPS,
@@ -141,8 +149,7 @@ impl SampleMap {
     /// Samples per pass of pixel (x, y), on average.
     #[inline]
     pub fn weight(&self, x: u32, y: u32) -> f64 {
-        let b = (y / BLOCK * self.blocks_x + x / BLOCK) as usize;
-        1.0 + self.weight[b] as f64 / STEPS
+        1.0 + self.weight[(y * self.width + x) as usize] as f64 / STEPS
     }
 
     /// Mean samples per pixel and pass.
@@ -183,29 +190,28 @@ impl SampleMap {
     }
 }
 
-/// Samples per pass for per-sample deviations `sigma` (of blocks of `area(b)` pixels): n_b =
-/// clamp(sigma_b / lambda, 1, MAX_WEIGHT), lambda the fixed point of lambda^2 = sum(a s^2 / n) /
-/// sum(a n), where the product of error and cost is stationary.
-fn optimal_counts(sigma: &[f64], area: impl Fn(usize) -> f64) -> Vec<f64> {
-    let a: Vec<f64> = (0..sigma.len()).map(&area).collect();
-    let total_area: f64 = a.iter().sum();
-    let mean_sigma = sigma.iter().zip(&a).map(|(s, a)| s * a).sum::<f64>() / total_area;
+/// A pixel's samples per pass for per-sample deviation `s` at scale `lambda`.
+#[inline]
+fn count(s: f64, lambda: f64) -> f64 {
+    (s / lambda).clamp(1.0, MAX_WEIGHT)
+}
+
+/// The scale of the counts for per-sample deviations `sigma` (one per pixel): n = count(s,
+/// lambda), lambda [`LAMBDA_FACTOR`] times the fixed point of lambda^2 = sum(s^2 / n) / sum(n),
+/// where the product of error and cost is stationary; infinite (one sample everywhere) when
+/// the pilot saw no noise. Summed in order, so the map is the same whatever the thread count.
+fn count_scale(sigma: &[f32]) -> f64 {
+    let mean_sigma = sigma.iter().map(|&s| s as f64).sum::<f64>() / sigma.len().max(1) as f64;
     if !(mean_sigma > 0.0 && mean_sigma.is_finite()) {
-        return vec![1.0; sigma.len()];
+        return f64::INFINITY;
     }
-    let counts = |lambda: f64| -> Vec<f64> {
-        sigma
-            .iter()
-            .map(|s| (s / lambda).clamp(1.0, MAX_WEIGHT))
-            .collect()
-    };
     let mut lambda = mean_sigma;
     for _ in 0..50 {
-        let n = counts(lambda);
-        let err: f64 = (0..n.len())
-            .map(|b| a[b] * sigma[b] * sigma[b] / n[b])
-            .sum();
-        let cost: f64 = (0..n.len()).map(|b| a[b] * n[b]).sum();
+        let (err, cost) = sigma.iter().fold((0.0, 0.0), |(e, c), &s| {
+            let s = s as f64;
+            let n = count(s, lambda);
+            (e + s * s / n, c + n)
+        });
         let next = (err / cost).sqrt();
         if !(next > 0.0 && next.is_finite()) {
             break;
@@ -216,7 +222,7 @@ fn optimal_counts(sigma: &[f64], area: impl Fn(usize) -> f64) -> Vec<f64> {
         }
         lambda = next;
     }
-    counts(lambda * LAMBDA_FACTOR)
+    lambda * LAMBDA_FACTOR
 }
 
 #[cfg(test)]
@@ -237,8 +243,8 @@ mod tests {
         film
     }
 
-    /// Noise in one corner: the blocks around it get more samples, the quiet ones one, and no
-    /// block's weight moves when only its own pixels change.
+    /// Noise in one corner: the pixels around it get more samples, the quiet ones one, and no
+    /// pixel's weight moves when only its own samples change.
     #[test]
     fn noisy_neighbourhoods_get_more_samples_and_own_pixels_do_not_count() {
         let noisy = |x: u32, y: u32, pass: u32| {
@@ -248,25 +254,42 @@ mod tests {
                 1.0 + 0.01 * (pass % 2) as f64
             }
         };
-        {
-            let film = film_with(32, 24, noisy);
-            let map = SampleMap::build(&film, PILOT_PASSES);
-            assert!(map.weight(2, 2) > 4.0, "{}", map.weight(2, 2));
-            assert_eq!(map.weight(30, 20), 1.0);
-            assert!(map.mean() > 1.0 && map.mean() < 2.0, "{}", map.mean());
-            // Block (24..26, 16..18) lies in a quiet region: noise in its own pixels leaves it
-            // be, and reaches the blocks whose rings hold them.
-            let own = film_with(32, 24, |x, y, p| {
-                if (24..26).contains(&x) && (16..18).contains(&y) {
-                    (p % 5) as f64 * 100.0
-                } else {
-                    noisy(x, y, p)
-                }
-            });
-            let own_map = SampleMap::build(&own, PILOT_PASSES);
-            assert_eq!(own_map.weight(24, 16), map.weight(24, 16));
-            assert!(own_map.weight(20, 16) > map.weight(20, 16));
-            assert!(own_map.weight(28, 20) > map.weight(28, 20));
+        let film = film_with(32, 24, noisy);
+        let map = SampleMap::build(&film, PILOT_PASSES);
+        assert!(map.weight(2, 2) > 4.0, "{}", map.weight(2, 2));
+        assert_eq!(map.weight(30, 20), 1.0);
+        assert!(map.mean() > 1.0 && map.mean() < 2.0, "{}", map.mean());
+        // Pixel (24, 16) lies in a quiet region: noise in its own samples leaves it be, and
+        // reaches the pixels whose rings hold it, next to it and 4 away, not 5.
+        let own = film_with(32, 24, |x, y, p| {
+            if (x, y) == (24, 16) {
+                (p % 5) as f64 * 100.0
+            } else {
+                noisy(x, y, p)
+            }
+        });
+        let own_map = SampleMap::build(&own, PILOT_PASSES);
+        assert_eq!(own_map.weight(24, 16), map.weight(24, 16));
+        for (x, y) in [(25, 16), (24, 17), (20, 16), (28, 20)] {
+            assert!(own_map.weight(x, y) > map.weight(x, y), "({x}, {y})");
+        }
+        assert_eq!(own_map.weight(29, 16), map.weight(29, 16));
+        // A bright 2x2 feature in a quiet region (the small light seen in the mirror ball): each
+        // of its pixels sees the other three and takes more samples.
+        let feature = film_with(32, 24, |x, y, p| {
+            if (12..14).contains(&x) && (16..18).contains(&y) {
+                (p % 4) as f64 * 100.0
+            } else {
+                noisy(x, y, p)
+            }
+        });
+        let feature_map = SampleMap::build(&feature, PILOT_PASSES);
+        for (x, y) in [(12, 16), (13, 16), (12, 17), (13, 17)] {
+            assert!(
+                feature_map.weight(x, y) > 4.0,
+                "{}",
+                feature_map.weight(x, y)
+            );
         }
     }
 

@@ -178,10 +178,10 @@ impl CausticVertex {
 /// two: its first diffuse hit and the second one after a specular chain). A join picks one
 /// vertex of the pass with probability 1 / (vertices left) whether or not they were all kept
 /// (see [`CausticPass::pick_index`]), so the cap costs nothing in expectation; it bounds the pass's
-/// state: 0.1 light paths per pixel x (2 splats x 16 bytes + 0.8 x 56 bytes) = 7.7 bytes per
-/// pixel, 63.9 with the film and the adaptive map. Measured on cornell (1.32 vertices per
-/// light path before the cap) in the README.
-pub const VERTICES_PER_PATH: f64 = 0.8;
+/// state: 0.1 light paths per pixel x (2 splats x 16 bytes + 0.66 x 56 bytes) = 6.9 bytes per
+/// pixel, 63.9 with the film (56) and the adaptive map (1). Measured on cornell (1.32 vertices
+/// per light path before the cap) in the README.
+pub const VERTICES_PER_PATH: f64 = 0.66;
 
 /// The caustic vertices one chunk of light paths left: how many (`seen`) and where its kept
 /// uniform sample of them starts in [`PassSplats::vertices`] (`kept` of them).
@@ -598,7 +598,7 @@ impl CausticTracer {
     }
 
     /// Whether a pass's kept light-path ends outgrow the core's cache (more than 1 MiB at
-    /// [`VERTICES_PER_PATH`]: images of more than ~230k pixels). Camera paths then pick the end
+    /// [`VERTICES_PER_PATH`]: images of more than ~280k pixels). Camera paths then pick the end
     /// each vertex joins a ray ahead and prefetch it; on smaller passes the ends stay cached and
     /// the picks are made at the vertex, as the draw order of the smaller images always was.
     pub fn large_passes(&self) -> bool {
