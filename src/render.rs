@@ -397,6 +397,12 @@ thread_local! {
         std::cell::RefCell::default();
 }
 
+/// Most camera samples traced side by side in one stream: far more than a batch needs to keep
+/// the vector units busy (a 320-pixel row is 320), few enough that a thread's stream buffers
+/// stay ~1.5 MB whatever the image's width and the adaptive map. The unit tests' 40-pixel rows
+/// are cut in pieces too, so they check that the pieces' joins change no sample.
+const STREAM_SAMPLES: usize = if cfg!(test) { 24 } else { 2048 };
+
 /// Per-thread scratch for [`sample_row`].
 #[derive(Default)]
 pub struct RowScratch {
@@ -436,25 +442,33 @@ pub fn sample_row(
         }
     }
     let caustics = caustics.map(|c| c.for_row(settings.seed, pass, y));
-    let plan = &scratch.plan;
-    let samples = plan
-        .iter()
-        .map(|&(x, sample)| camera_sample(scene, settings, x, y, sample));
-    let max_depth = integrator::depth_limit(settings);
-    match settings.integrator {
-        IntegratorKind::Naive => return scratch.naive.radiance(scene, samples, max_depth, out),
-        IntegratorKind::Path => {
-            return scratch
-                .path
-                .radiance(scene, samples, max_depth, caustics, out)
-        }
-        IntegratorKind::Painterly => {}
-    }
     out.clear();
-    out.extend(
-        plan.iter()
-            .map(|&(x, sample)| sample_pixel_counted(scene, settings, x, y, sample, caustics)),
-    );
+    if settings.integrator == IntegratorKind::Painterly {
+        out.extend(
+            scratch
+                .plan
+                .iter()
+                .map(|&(x, sample)| sample_pixel_counted(scene, settings, x, y, sample, caustics)),
+        );
+        return;
+    }
+    let max_depth = integrator::depth_limit(settings);
+    // In pieces of at most STREAM_SAMPLES: an adaptive row takes up to 16 samples a pixel, and a
+    // stream keeps ~700 bytes of state a sample (path, sampler, shadow rays, ray batch) in the
+    // thread's buffers for the rest of the render. Each path's result does not depend on which
+    // others share its stream, so the image is the same.
+    for piece in scratch.plan.chunks(STREAM_SAMPLES) {
+        let samples = piece
+            .iter()
+            .map(|&(x, sample)| camera_sample(scene, settings, x, y, sample));
+        if settings.integrator == IntegratorKind::Naive {
+            scratch.naive.radiance(scene, samples, max_depth, out);
+        } else {
+            scratch
+                .path
+                .radiance(scene, samples, max_depth, caustics, out);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -498,7 +512,8 @@ mod tests {
     /// The batched drivers of `path` and `naive` give every sample the bits and the ray count of
     /// the one-path-at-a-time integrators: on sphere scenes (flat scan, 8-ray lanes), a mesh
     /// (BVH), with and without caustic joins, both samplers, a depth limit, one sample per pixel
-    /// or an adaptive map's several, each with the sample number the map gives it.
+    /// or an adaptive map's several, each with the sample number the map gives it; every row
+    /// traced in several streams (`STREAM_SAMPLES`).
     #[test]
     fn rows_traced_side_by_side_match_paths_traced_alone() {
         let map = test_map();

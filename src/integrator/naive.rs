@@ -88,8 +88,8 @@ pub struct Stream {
 }
 
 impl Stream {
-    /// Trace every camera sample of `samples` (its ray and sampler) to its end; returns each
-    /// one's radiance and closest-hit query count, in order, in `out`.
+    /// Trace every camera sample of `samples` (its ray and sampler) to its end; appends each
+    /// one's radiance and closest-hit query count, in order, to `out`.
     pub fn radiance(
         &mut self,
         scene: &Scene,
@@ -122,7 +122,6 @@ impl Stream {
             }
             std::mem::swap(&mut self.active, &mut self.next);
         }
-        out.clear();
         out.extend(self.paths.iter().map(|(p, s)| (p.l, s.rays())));
     }
 }

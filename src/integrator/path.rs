@@ -359,8 +359,8 @@ pub struct Stream {
 }
 
 impl Stream {
-    /// Trace every camera sample of `samples` (its ray and sampler) to its end; returns each
-    /// one's radiance and closest-hit query count, in order, in `out`. Each round asks the
+    /// Trace every camera sample of `samples` (its ray and sampler) to its end; appends each
+    /// one's radiance and closest-hit query count, in order, to `out`. Each round asks the
     /// accelerator at once for every live path's shadow rays from its last vertex and its
     /// next ray.
     pub fn radiance(
@@ -417,7 +417,6 @@ impl Stream {
             }
             std::mem::swap(&mut self.active, &mut self.next);
         }
-        out.clear();
         out.extend(self.paths.iter().map(|(p, s, _, _)| (p.l, s.rays())));
     }
 }
