@@ -36,7 +36,6 @@
 use crate::camera::Camera;
 use crate::geometry::{spawn_origin, Hit, Sphere};
 use crate::light::{sphere::on_cap, Light};
-use crate::material::MaterialKind;
 use crate::math::{luminance, DVec3, Frame, Ray};
 use crate::sampling::{warp, Rng, Sampler, SamplerKind};
 use crate::scene::Scene;
@@ -704,7 +703,9 @@ impl CausticTracer {
                 side.leave_y(cos_in, bs.pdf, m.eval(bs.wi, wo, hit.n).pdf, cos_out);
                 run = 0;
             }
-            let weight = bs.weight * importance_scale(m.kind, wo, bs.wi, hit.n);
+            // Light carries importance, for which radiance's compression across a refraction
+            // (in `weight`) does not apply: `eta_scale` undoes it.
+            let weight = bs.weight * bs.eta_scale;
             beta *= weight;
             throughput *= weight;
             bounces += 1;
@@ -964,18 +965,6 @@ fn pilot_mean_luminance(scene: &Scene, settings: &RenderSettings) -> f64 {
         mean
     } else {
         0.0
-    }
-}
-
-/// Radiance-mode BSDF weights divide refraction by eta^2 (radiance is compressed entering a
-/// denser medium); light carries importance the other way, where that factor does not apply.
-fn importance_scale(kind: MaterialKind, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
-    match kind {
-        MaterialKind::Glass { ior } if wo.dot(n) * wi.dot(n) < 0.0 => {
-            let eta = if wo.dot(n) > 0.0 { ior } else { 1.0 / ior };
-            eta * eta
-        }
-        _ => 1.0,
     }
 }
 

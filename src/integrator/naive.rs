@@ -30,6 +30,8 @@ struct NaivePath {
     ray: Ray,
     l: DVec3,
     beta: DVec3,
+    /// The product of the bounces' `eta_scale`s, for the roulette.
+    eta_scale: f64,
     depth: u32,
 }
 
@@ -39,6 +41,7 @@ impl NaivePath {
             ray,
             l: DVec3::ZERO,
             beta: DVec3::ONE,
+            eta_scale: 1.0,
             depth: 0,
         }
     }
@@ -66,9 +69,11 @@ impl NaivePath {
             return false;
         };
         self.beta *= bs.weight;
+        self.eta_scale *= bs.eta_scale;
         self.depth += 1;
         next_ray(
             &mut self.beta,
+            self.eta_scale,
             self.depth,
             sampler,
             hit,

@@ -49,6 +49,8 @@ pub fn radiance(
 ) -> DVec3 {
     let mut l = DVec3::ZERO;
     let mut beta = DVec3::ONE;
+    // For the roulette, as `path` keeps it (see `BsdfSample::eta_scale`).
+    let mut eta_scale = 1.0;
     let mut depth = 0u32;
     // Whether the previous bounce was a delta lobe (the camera counts as one).
     let mut specular = true;
@@ -114,6 +116,7 @@ pub fn radiance(
             break;
         };
         beta *= bs.weight;
+        eta_scale *= bs.eta_scale;
         specular = bs.delta;
         prev_pdf_bsdf = bs.pdf;
         prev_p = hit.p;
@@ -127,7 +130,7 @@ pub fn radiance(
             if !beta.cmpgt(DVec3::ZERO).any() {
                 break;
             }
-        } else if !russian_roulette(&mut beta, depth, u_rr) {
+        } else if !russian_roulette(&mut beta, eta_scale, depth, u_rr) {
             break;
         }
         ray = Ray::new(spawn_origin(hit.p, hit.n, hit.err, bs.wi), bs.wi);
@@ -170,6 +173,7 @@ fn painterly_sample(
                 // Not a density: marks the bounce as non-delta; its emission hit is not counted.
                 pdf: 0.0,
                 delta: false,
+                eta_scale: 1.0,
             })
         }
         MaterialKind::Glass { ior } => {

@@ -100,6 +100,8 @@ struct PathState {
     ray: Ray,
     l: DVec3,
     beta: DVec3,
+    /// The product of the bounces' `eta_scale`s, for the roulette.
+    eta_scale: f64,
     depth: u32,
     /// Whether the previous bounce was a delta lobe (the camera counts as one).
     specular: bool,
@@ -193,6 +195,7 @@ impl PathState {
             ray,
             l: DVec3::ZERO,
             beta: DVec3::ONE,
+            eta_scale: 1.0,
             depth: 0,
             specular: true,
             prev_p: ray.o,
@@ -305,6 +308,7 @@ impl PathState {
             return false;
         };
         self.beta *= bs.weight;
+        self.eta_scale *= bs.eta_scale;
         self.chains.bounce(
             material.is_delta(),
             hit.n.dot(wo).abs(),
@@ -319,6 +323,7 @@ impl PathState {
         self.depth += 1;
         let go_on = next_ray(
             &mut self.beta,
+            self.eta_scale,
             self.depth,
             sampler,
             hit,

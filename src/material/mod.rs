@@ -45,6 +45,11 @@ pub struct BsdfSample {
     pub pdf: f64,
     /// A delta lobe (mirror, glass): light sampling cannot find it, so MIS does not apply.
     pub delta: bool,
+    /// What the throughput the roulette reads is multiplied by besides `weight`: eta^2 across a
+    /// refraction, undoing the compression of radiance `weight` carries (pbrt's `etaScale`),
+    /// else 1. Without it a camera path inside glass (throughput 1/2.25) was ended 56% of the
+    /// time and its survivors came out 2.25 times brighter than the light they reached.
+    pub eta_scale: f64,
 }
 
 /// f cos and the pdf of sampling `wi`, for the non-delta materials.
@@ -94,6 +99,7 @@ impl Material {
                     weight: self.color,
                     pdf: local.z * FRAC_1_PI,
                     delta: false,
+                    eta_scale: 1.0,
                 })
             }
             MaterialKind::Mirror => Some(BsdfSample {
@@ -101,6 +107,7 @@ impl Material {
                 weight: self.color,
                 pdf: 1.0,
                 delta: true,
+                eta_scale: 1.0,
             }),
             MaterialKind::Glass { ior } => {
                 let entering = cos_o > 0.0;
@@ -113,6 +120,7 @@ impl Material {
                         weight: self.color,
                         pdf: f.reflectance,
                         delta: true,
+                        eta_scale: 1.0,
                     })
                 } else {
                     let wi = -wo / eta + nf * (cos_i / eta - f.cos_t);
@@ -123,6 +131,7 @@ impl Material {
                         weight: self.color / (eta * eta),
                         pdf: 1.0 - f.reflectance,
                         delta: true,
+                        eta_scale: eta * eta,
                     })
                 }
             }
@@ -208,5 +217,48 @@ mod tests {
                 assert!(e.f_cos.cmple(bound).all(), "{kind:?} at the normal");
             }
         }
+    }
+
+    /// A sample's weight times its eta_scale is the material's colour: the roulette reads the
+    /// throughput without the radiance's compression across refractions, which `eta_scale`
+    /// undoes (2.25 into glass of index 1.5 from a camera path, 1 / 2.25 out of it).
+    #[test]
+    fn weight_times_eta_scale_is_the_colour() {
+        let mut rng = Rng::new(5);
+        let mut refractions = [0u32; 2];
+        for kind in [
+            MaterialKind::Diffuse,
+            MaterialKind::Mirror,
+            MaterialKind::Glass { ior: 1.5 },
+        ] {
+            for _ in 0..20_000 {
+                let color = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+                let m = Material {
+                    kind,
+                    color,
+                    emission: DVec3::ZERO,
+                };
+                let (wo, n) = (
+                    warp::uniform_sphere((rng.next_f64(), rng.next_f64())),
+                    warp::uniform_sphere((rng.next_f64(), rng.next_f64())),
+                );
+                let u = (rng.next_f64(), rng.next_f64());
+                let Some(bs) = m.sample(wo, n, rng.next_f64(), u) else {
+                    continue;
+                };
+                let restored = bs.weight * bs.eta_scale;
+                assert!(
+                    (restored - color).abs().max_element() <= 1e-12,
+                    "{kind:?}: {restored:?} vs {color:?}"
+                );
+                if bs.eta_scale != 1.0 {
+                    let into = wo.dot(n) > 0.0;
+                    let expected = if into { 2.25 } else { 1.0 / 2.25 };
+                    assert!((bs.eta_scale - expected).abs() < 1e-12, "{}", bs.eta_scale);
+                    refractions[into as usize] += 1;
+                }
+            }
+        }
+        assert!(refractions.iter().all(|&r| r > 1000), "{refractions:?}");
     }
 }
