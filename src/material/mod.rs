@@ -187,45 +187,10 @@ mod tests {
 
     /// The caustic joins' early roulette relies on this: no direction pair gets more than the
     /// bound out of any material, grazing and backfacing ones included.
-    #[test]
-    fn f_cos_never_exceeds_its_bound() {
-        let mut rng = Rng::new(3);
-        let kinds = [
-            MaterialKind::Diffuse,
-            MaterialKind::Mirror,
-            MaterialKind::Glass { ior: 1.5 },
-        ];
-        for kind in kinds {
-            for _ in 0..20_000 {
-                let color = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
-                let m = Material {
-                    kind,
-                    color,
-                    emission: DVec3::ZERO,
-                };
-                let mut dir = || warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
-                let (wo, wi, n) = (dir(), dir(), dir());
-                let e = m.eval(wo, wi, n);
-                let bound = m.f_cos_bound() * (1.0 + 1e-12);
-                assert!(
-                    e.f_cos.cmple(bound).all(),
-                    "{kind:?}: {:?} > {bound:?}",
-                    e.f_cos
-                );
-                // The normal itself: the largest cosine there is.
-                let e = m.eval(n, n, n);
-                assert!(e.f_cos.cmple(bound).all(), "{kind:?} at the normal");
-            }
-        }
-    }
-
-    /// A sample's weight times its eta_scale is the material's colour: the roulette reads the
-    /// throughput without the radiance's compression across refractions, which `eta_scale`
-    /// undoes (2.25 into glass of index 1.5 from a camera path, 1 / 2.25 out of it).
-    #[test]
-    fn weight_times_eta_scale_is_the_colour() {
-        let mut rng = Rng::new(5);
-        let mut refractions = [0u32; 2];
+    /// 20,000 materials of each kind with random colours, each handed to `check` with the
+    /// generator for its directions.
+    fn for_random_materials(seed: u64, mut check: impl FnMut(&Material, &mut Rng)) {
+        let mut rng = Rng::new(seed);
         for kind in [
             MaterialKind::Diffuse,
             MaterialKind::Mirror,
@@ -238,27 +203,57 @@ mod tests {
                     color,
                     emission: DVec3::ZERO,
                 };
-                let (wo, n) = (
-                    warp::uniform_sphere((rng.next_f64(), rng.next_f64())),
-                    warp::uniform_sphere((rng.next_f64(), rng.next_f64())),
-                );
-                let u = (rng.next_f64(), rng.next_f64());
-                let Some(bs) = m.sample(wo, n, rng.next_f64(), u) else {
-                    continue;
-                };
-                let restored = bs.weight * bs.eta_scale;
-                assert!(
-                    (restored - color).abs().max_element() <= 1e-12,
-                    "{kind:?}: {restored:?} vs {color:?}"
-                );
-                if bs.eta_scale != 1.0 {
-                    let into = wo.dot(n) > 0.0;
-                    let expected = if into { 2.25 } else { 1.0 / 2.25 };
-                    assert!((bs.eta_scale - expected).abs() < 1e-12, "{}", bs.eta_scale);
-                    refractions[into as usize] += 1;
-                }
+                check(&m, &mut rng);
             }
         }
+    }
+
+    #[test]
+    fn f_cos_never_exceeds_its_bound() {
+        for_random_materials(3, |m, rng| {
+            let kind = m.kind;
+            let mut dir = || warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
+            let (wo, wi, n) = (dir(), dir(), dir());
+            let e = m.eval(wo, wi, n);
+            let bound = m.f_cos_bound() * (1.0 + 1e-12);
+            assert!(
+                e.f_cos.cmple(bound).all(),
+                "{kind:?}: {:?} > {bound:?}",
+                e.f_cos
+            );
+            // The normal itself: the largest cosine there is.
+            let e = m.eval(n, n, n);
+            assert!(e.f_cos.cmple(bound).all(), "{kind:?} at the normal");
+        });
+    }
+
+    /// A sample's weight times its eta_scale is the material's colour: the roulette reads the
+    /// throughput without the radiance's compression across refractions, which `eta_scale`
+    /// undoes (2.25 into glass of index 1.5 from a camera path, 1 / 2.25 out of it).
+    #[test]
+    fn weight_times_eta_scale_is_the_colour() {
+        let mut refractions = [0u32; 2];
+        for_random_materials(5, |m, rng| {
+            let mut dir = || warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
+            let (wo, n) = (dir(), dir());
+            let u = (rng.next_f64(), rng.next_f64());
+            let Some(bs) = m.sample(wo, n, rng.next_f64(), u) else {
+                return;
+            };
+            let restored = bs.weight * bs.eta_scale;
+            assert!(
+                (restored - m.color).abs().max_element() <= 1e-12,
+                "{:?}: {restored:?} vs {:?}",
+                m.kind,
+                m.color
+            );
+            if bs.eta_scale != 1.0 {
+                let into = wo.dot(n) > 0.0;
+                let expected = if into { 2.25 } else { 1.0 / 2.25 };
+                assert!((bs.eta_scale - expected).abs() < 1e-12, "{}", bs.eta_scale);
+                refractions[into as usize] += 1;
+            }
+        });
         assert!(refractions.iter().all(|&r| r > 1000), "{refractions:?}");
     }
 }
