@@ -391,15 +391,16 @@ fn camera_sample(
 thread_local! {
     /// Each render thread's row buffers (path states, ray batches, the row's samples), kept from
     /// band to band and pass to pass. Fresh ones per band grew by doubling: ~2000 allocations a
-    /// pass whatever the image's size (tests/allocations.rs counts them). A row's path states
-    /// take ~400 bytes per pixel of a row: 128 KB per thread at 320 wide.
+    /// pass whatever the image's size (tests/allocations.rs counts them). Their size is bounded
+    /// by [`STREAM_SAMPLES`].
     static ROW_BUFFERS: std::cell::RefCell<(RowScratch, Vec<(DVec3, u32)>)> =
         std::cell::RefCell::default();
 }
 
 /// Most camera samples traced side by side in one stream: far more than a batch needs to keep
 /// the vector units busy (a 320-pixel row is 320), few enough that a thread's stream buffers
-/// stay ~1.5 MB whatever the image's width and the adaptive map. The unit tests' 40-pixel rows
+/// stay ~1.5 MB whatever the image's width and the adaptive map (`path`: 448 bytes of path,
+/// sampler and shadow rays, up to 3 rays of 68 in the batch, the plan's 16 and the result's 32). The unit tests' 40-pixel rows
 /// are cut in pieces too, so they check that the pieces' joins change no sample.
 const STREAM_SAMPLES: usize = if cfg!(test) { 24 } else { 2048 };
 
@@ -494,7 +495,7 @@ mod tests {
     }
 
     /// The summary says when a render's joins pick from windows (passes whose kept ends exceed
-    /// 1 MiB): cornell at 640x480 keeps ~1.4 MB a pass, at 320x240 a quarter of that.
+    /// 1 MiB): cornell at 640x480 keeps ~1.1 MB a pass, at 320x240 a quarter of that.
     #[test]
     fn the_caustics_note_says_when_joins_pick_from_windows() {
         let scene = crate::scene::load("cornell").expect("built-in scene");
