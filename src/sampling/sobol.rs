@@ -127,11 +127,16 @@ impl PaddedSobol {
         let shuffled = laine_karras(self.rev_index, h as u32).reverse_bits();
         let h2 = mix64(h);
         // owen_scramble(reverse(i)) = reverse(LK(i)): the van der Corput point, scrambled.
-        let x = laine_karras(shuffled, h2 as u32).reverse_bits();
+        let x = laine_karras(shuffled, h2 as u32);
         // owen_scramble(sobol(i)) = reverse(LK(reverse(sobol(i)))), the inner reversal tabled.
-        let y =
-            laine_karras(apply(&SOBOL_DIM1_REV_BYTES, shuffled), (h2 >> 32) as u32).reverse_bits();
-        (x as f64 * TO_UNIT, y as f64 * TO_UNIT)
+        let y = laine_karras(apply(&SOBOL_DIM1_REV_BYTES, shuffled), (h2 >> 32) as u32);
+        // Both outer reversals in one (x86 has none in hardware, and each took ~13 instructions):
+        // reversing y:x as a u64 leaves reverse(x) in the high half and reverse(y) in the low.
+        let both = ((y as u64) << 32 | x as u64).reverse_bits();
+        (
+            (both >> 32) as f64 * TO_UNIT,
+            (both as u32) as f64 * TO_UNIT,
+        )
     }
 
     /// A 1D sample: the van der Corput dimension of its own shuffled, scrambled pair.
