@@ -66,18 +66,6 @@ pub struct RayBatch {
 }
 
 impl RayBatch {
-    /// The rays' coordinates, one column each.
-    fn columns(&mut self) -> [&mut Vec<f64>; 6] {
-        [
-            &mut self.ox,
-            &mut self.oy,
-            &mut self.oz,
-            &mut self.dx,
-            &mut self.dy,
-            &mut self.dz,
-        ]
-    }
-
     pub fn clear(&mut self) {
         self.rays.clear();
     }
@@ -109,24 +97,21 @@ impl RayBatch {
     /// size the outputs, every ray starting with no hit before its `t_max`.
     fn prepare(&mut self) {
         let padded = self.rays.len().div_ceil(LANES) * LANES;
-        for v in self.columns() {
+        let rays = &self.rays;
+        // Column by column: clearing and zero-filling whole columns before overwriting them
+        // added a memset per column and batch (1% of a cornell render's instructions).
+        let column = |v: &mut Vec<f64>, get: fn(&(Ray, f64)) -> f64| {
             v.clear();
+            v.extend(rays.iter().map(get));
             v.resize(padded, 0.0);
-        }
-        self.t.clear();
-        self.t.resize(padded, 0.0);
-        let columns = (self.ox.iter_mut())
-            .zip(self.oy.iter_mut())
-            .zip(self.oz.iter_mut())
-            .zip(self.dx.iter_mut())
-            .zip(self.dy.iter_mut())
-            .zip(self.dz.iter_mut())
-            .zip(self.t.iter_mut());
-        for (((((((ox, oy), oz), dx), dy), dz), t), (ray, t_max)) in columns.zip(&self.rays) {
-            (*ox, *oy, *oz) = (ray.o.x, ray.o.y, ray.o.z);
-            (*dx, *dy, *dz) = (ray.d.x, ray.d.y, ray.d.z);
-            *t = *t_max;
-        }
+        };
+        column(&mut self.ox, |r| r.0.o.x);
+        column(&mut self.oy, |r| r.0.o.y);
+        column(&mut self.oz, |r| r.0.o.z);
+        column(&mut self.dx, |r| r.0.d.x);
+        column(&mut self.dy, |r| r.0.d.y);
+        column(&mut self.dz, |r| r.0.d.z);
+        column(&mut self.t, |r| r.1);
         self.prim.clear();
         self.prim.resize(padded, u32::MAX);
     }
