@@ -129,7 +129,8 @@ pub struct SphereLight {
 }
 
 /// How directions towards the light are chosen from a shading point. Caps are borrowed: with
-/// their frame they are 136 bytes, and copying them per light sample was 1% of a cornell render.
+/// their frame they are 136 bytes, and copying them per light sample was 1% of a cornell render's
+/// instructions.
 enum Strategy<'a> {
     /// Strictly inside: every direction reaches the sphere.
     Inside,
