@@ -459,9 +459,9 @@ pub fn sample_row(
     }
     let max_depth = integrator::depth_limit(settings);
     // In pieces of at most STREAM_SAMPLES: an adaptive row takes up to 16 samples a pixel, and a
-    // stream keeps ~700 bytes of state a sample (path, sampler, shadow rays, ray batch) in the
-    // thread's buffers for the rest of the render. Each path's result does not depend on which
-    // others share its stream, so the image is the same.
+    // stream keeps each sample's state (path, sampler, shadow rays, ray batch: see
+    // STREAM_SAMPLES) in the thread's buffers for the rest of the render. Each path's result
+    // does not depend on which others share its stream, so the image is the same.
     for piece in scratch.plan.chunks(STREAM_SAMPLES) {
         let samples = piece
             .iter()
