@@ -360,7 +360,9 @@ pub struct Stream {
     paths: Vec<(PathState, Sampler, Shadows, bool)>,
     active: Vec<u32>,
     next: Vec<u32>,
+    /// The round's rays, and the next round's, filled as each vertex asks for them.
     batch: RayBatch,
+    next_batch: RayBatch,
 }
 
 impl Stream {
@@ -383,20 +385,16 @@ impl Stream {
         }));
         self.active.clear();
         self.active.extend(0..self.paths.len() as u32);
+        self.batch.clear();
+        for (path, sampler, _, _) in &mut self.paths {
+            sampler.count_ray();
+            self.batch.push(&path.ray, f64::INFINITY);
+        }
         while !self.active.is_empty() {
-            self.batch.clear();
-            for &i in &self.active {
-                let (path, sampler, shadows, go_on) = &mut self.paths[i as usize];
-                for s in shadows.iter() {
-                    sampler.count_ray();
-                    self.batch.push(&s.ray, s.t_max);
-                }
-                if *go_on {
-                    sampler.count_ray();
-                    self.batch.push(&path.ray, f64::INFINITY);
-                }
-            }
             scene.intersect_batch(&mut self.batch);
+            // Each vertex's rays go straight into the next round's batch, in the order a
+            // separate pass over the paths would push them: their shadow rays, then their ray.
+            self.next_batch.clear();
             self.next.clear();
             let mut j = 0;
             for &i in &self.active {
@@ -416,10 +414,22 @@ impl Stream {
                     (prim != u32::MAX).then(|| scene.hit_at(&path.ray, self.batch.t[j], prim));
                 j += 1;
                 *go_on = path.vertex(scene, hit.as_ref(), sampler, max_depth, caustics, shadows);
-                if *go_on || shadows.iter().next().is_some() {
+                let mut queued = false;
+                for s in shadows.iter() {
+                    sampler.count_ray();
+                    self.next_batch.push(&s.ray, s.t_max);
+                    queued = true;
+                }
+                if *go_on {
+                    sampler.count_ray();
+                    self.next_batch.push(&path.ray, f64::INFINITY);
+                    queued = true;
+                }
+                if queued {
                     self.next.push(i);
                 }
             }
+            std::mem::swap(&mut self.batch, &mut self.next_batch);
             std::mem::swap(&mut self.active, &mut self.next);
         }
         out.extend(self.paths.iter().map(|(p, s, _, _)| (p.l, s.rays())));
