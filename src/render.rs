@@ -371,7 +371,7 @@ pub fn sample_pixel_counted(
 
 /// The sampler of sample number `sample` of pixel (x, y) and its camera ray, jittered over the
 /// pixel's square footprint (box filter) by the sampler's first two dimensions.
-#[inline]
+#[inline(always)]
 fn camera_sample(
     scene: &Scene,
     settings: &RenderSettings,
@@ -389,6 +389,25 @@ fn camera_sample(
         y as f64 + jy,
     );
     (ray, sampler)
+}
+
+/// The camera samples of a row's plan, in order. An iterator of its own rather than a map
+/// over the plan: a closure is compiled on its own, outside `sample_row`'s fast copy.
+struct CameraSamples<'a> {
+    scene: &'a Scene,
+    settings: &'a RenderSettings,
+    y: u32,
+    plan: std::slice::Iter<'a, (u32, u64)>,
+}
+
+impl Iterator for CameraSamples<'_> {
+    type Item = (Ray, Sampler);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(Ray, Sampler)> {
+        let &(x, sample) = self.plan.next()?;
+        Some(camera_sample(self.scene, self.settings, x, self.y, sample))
+    }
 }
 
 thread_local! {
@@ -421,8 +440,59 @@ pub struct RowScratch {
 /// (radiance and closest-hit queries), in the order of `scratch.plan`: [`sample_pixel_counted`]
 /// one by one for `painterly`; `path` and `naive` trace the row's paths side by side with batched
 /// closest-hit queries (the same image bit for bit, faster).
+///
+/// Runs a copy compiled for x86-64-v3 (AVX2, FMA, BMI1/2, LZCNT) where the CPU has it, the
+/// portable one elsewhere; the integrators' hot functions are `#[inline(always)]` so both copies
+/// hold all of the shading. Rust never contracts a multiply and an add into an FMA, so the two
+/// give the same bits (checked by `rows_traced_side_by_side_match_paths_traced_alone`). Measured
+/// on an AMD EPYC (Zen 4), cornell 320x240, 2 threads: the inlining alone 10% faster, the v3 copy
+/// 5% more (README, performance).
 #[allow(clippy::too_many_arguments)]
 pub fn sample_row(
+    scene: &Scene,
+    settings: &RenderSettings,
+    y: u32,
+    pass: u32,
+    map: Option<&SampleMap>,
+    caustics: Option<CausticPass>,
+    scratch: &mut RowScratch,
+    out: &mut Vec<(DVec3, u32)>,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if has_v3() {
+        // SAFETY: the CPU has every feature the function is compiled for (checked above).
+        unsafe { sample_row_v3(scene, settings, y, pass, map, caustics, scratch, out) };
+        return;
+    }
+    sample_row_body(scene, settings, y, pass, map, caustics, scratch, out)
+}
+
+/// Whether the CPU has what [`sample_row_v3`] is compiled for (the check is a cached load).
+#[cfg(target_arch = "x86_64")]
+fn has_v3() -> bool {
+    use std::arch::is_x86_feature_detected as has;
+    has!("avx2") && has!("fma") && has!("bmi1") && has!("bmi2") && has!("lzcnt") && has!("popcnt")
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn sample_row_v3(
+    scene: &Scene,
+    settings: &RenderSettings,
+    y: u32,
+    pass: u32,
+    map: Option<&SampleMap>,
+    caustics: Option<CausticPass>,
+    scratch: &mut RowScratch,
+    out: &mut Vec<(DVec3, u32)>,
+) {
+    sample_row_body(scene, settings, y, pass, map, caustics, scratch, out)
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn sample_row_body(
     scene: &Scene,
     settings: &RenderSettings,
     y: u32,
@@ -463,9 +533,12 @@ pub fn sample_row(
     // STREAM_SAMPLES) in the thread's buffers for the rest of the render. Each path's result
     // does not depend on which others share its stream, so the image is the same.
     for piece in scratch.plan.chunks(STREAM_SAMPLES) {
-        let samples = piece
-            .iter()
-            .map(|&(x, sample)| camera_sample(scene, settings, x, y, sample));
+        let samples = CameraSamples {
+            scene,
+            settings,
+            y,
+            plan: piece.iter(),
+        };
         if settings.integrator == IntegratorKind::Naive {
             scratch.naive.radiance(scene, samples, max_depth, out);
         } else {
@@ -572,6 +645,29 @@ mod tests {
                             .collect();
                         assert_eq!(scratch.plan, expected);
                         assert_eq!(row.len(), expected.len());
+                        // The portable copy, which this machine may not run (it has the
+                        // features of the fast one), gives the same bits.
+                        let mut portable = Vec::new();
+                        sample_row_body(
+                            &scene,
+                            &settings,
+                            y,
+                            pass,
+                            map,
+                            caustics,
+                            &mut RowScratch::default(),
+                            &mut portable,
+                        );
+                        assert_eq!(
+                            portable
+                                .iter()
+                                .map(|(v, r)| (v.to_array().map(f64::to_bits), *r))
+                                .collect::<Vec<_>>(),
+                            row.iter()
+                                .map(|(v, r)| (v.to_array().map(f64::to_bits), *r))
+                                .collect::<Vec<_>>(),
+                            "{name} {integrator:?} {sampler:?} row {y} pass {pass}"
+                        );
                         for (&(x, sample), &(v, rays)) in expected.iter().zip(&row) {
                             let (w, r) =
                                 sample_pixel_counted(&scene, &settings, x, y, sample, caustics);

@@ -41,7 +41,7 @@ pub fn russian_roulette(beta: &mut DVec3, scale: f64, depth: u32, u: f64) -> boo
 /// if the path survives, the ray leaving the surface into `ray`. Returns whether the path goes on.
 ///
 /// [`BsdfSample::eta_scale`]: crate::material::BsdfSample::eta_scale
-#[inline]
+#[inline(always)]
 pub fn next_ray(
     beta: &mut DVec3,
     eta_scale: f64,
@@ -62,7 +62,7 @@ pub fn next_ray(
 /// The BSDF sample of `material` at `hit` for outgoing `wo`, its numbers drawn from `sampler`: the
 /// lobe choice and the direction are drawn only if the material reads them, otherwise their
 /// dimensions are passed over, so every path keeps its numbers whatever it hits.
-#[inline]
+#[inline(always)]
 pub fn sample_bsdf(
     material: &crate::material::Material,
     hit: &crate::geometry::Hit,

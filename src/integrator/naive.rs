@@ -47,7 +47,7 @@ impl NaivePath {
     }
 
     /// Take in what `ray` hit and choose the next ray; false when the path has ended.
-    #[inline]
+    #[inline(always)]
     fn bounce(
         &mut self,
         scene: &Scene,
@@ -95,6 +95,7 @@ pub struct Stream {
 impl Stream {
     /// Trace every camera sample of `samples` (its ray and sampler) to its end; appends each
     /// one's radiance and closest-hit query count, in order, to `out`.
+    #[inline(always)]
     pub fn radiance(
         &mut self,
         scene: &Scene,
@@ -103,8 +104,9 @@ impl Stream {
         out: &mut Vec<(DVec3, u32)>,
     ) {
         self.paths.clear();
-        self.paths
-            .extend(samples.map(|(ray, sampler)| (NaivePath::new(ray), sampler)));
+        for (ray, sampler) in samples {
+            self.paths.push((NaivePath::new(ray), sampler));
+        }
         self.active.clear();
         self.active.extend(0..self.paths.len() as u32);
         while !self.active.is_empty() {

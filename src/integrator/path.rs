@@ -211,7 +211,7 @@ impl PathState {
 
     /// Take in what `self.ray` hit: emission, the shadow rays of light sampling and of the
     /// caustic join (into `shadows`), and the next ray. Returns whether the path goes on.
-    #[inline]
+    #[inline(always)]
     fn vertex(
         &mut self,
         scene: &Scene,
@@ -370,6 +370,7 @@ impl Stream {
     /// one's radiance and closest-hit query count, in order, to `out`. Each round asks the
     /// accelerator at once for every live path's shadow rays from its last vertex and its
     /// next ray.
+    #[inline(always)]
     pub fn radiance(
         &mut self,
         scene: &Scene,
@@ -379,10 +380,12 @@ impl Stream {
         out: &mut Vec<(DVec3, u32)>,
     ) {
         self.paths.clear();
-        self.paths.extend(samples.map(|(ray, mut sampler)| {
+        // A plain loop, not `extend` over a map: the render's fast copy of this function
+        // (`render::sample_row`) only covers what is inlined into it, and the closure was not.
+        for (ray, mut sampler) in samples {
             let path = PathState::new(ray, &mut sampler, caustics);
-            (path, sampler, Shadows::default(), true)
-        }));
+            self.paths.push((path, sampler, Shadows::default(), true));
+        }
         self.active.clear();
         self.active.extend(0..self.paths.len() as u32);
         self.batch.clear();
@@ -442,7 +445,7 @@ impl Stream {
 /// weighted by the power heuristic against the camera path that would reach the light from y.
 /// Returns the shadow ray to trace and its value times the throughput `beta`, if the join is
 /// worth one.
-#[inline]
+#[inline(always)]
 fn connect_caustic(
     scene: &Scene,
     hit: &Hit,
@@ -587,7 +590,7 @@ pub(crate) fn direct_light(
 
 /// [`direct_light`] up to its shadow ray: the ray, and the value if it reaches the light, times
 /// the path throughput `beta`.
-#[inline]
+#[inline(always)]
 pub(crate) fn light_shadow(
     scene: &Scene,
     hit: &Hit,
@@ -625,7 +628,7 @@ pub(crate) fn light_shadow(
 /// smallpt's radius-1e5 walls), and a light that small misses: with radius 1e-8 a measured 5% of
 /// the light was lost. Falls back to `wi` when the aim cannot be recomputed (a light sampled from
 /// its own surface, or a direction that rounds past the light's rim).
-#[inline]
+#[inline(always)]
 fn shadow_ray(scene: &Scene, hit: &Hit, ls: &LightSample) -> Ray {
     let wi = ls.wi;
     let o = spawn_origin(hit.p, hit.n, hit.err, wi);

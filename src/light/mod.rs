@@ -101,7 +101,7 @@ impl Lights {
     /// Choose a light with `u_select` and a direction towards it from `p` with `u`. `side` is a
     /// point just off the surface at `p` on the side the path arrived from: it tells which part
     /// of a light cut by a surface through `p` can be seen.
-    #[inline]
+    #[inline(always)]
     pub fn sample(
         &self,
         p: DVec3,

@@ -184,7 +184,7 @@ impl SphereLight {
 
     /// How to sample from `p`; `side` is a point just off the surface at `p` on the side the path
     /// arrived from, which decides what side of a cutting surface `p` is on.
-    #[inline]
+    #[inline(always)]
     fn strategy(&self, p: DVec3, side: DVec3) -> Strategy<'_> {
         let to_centre = self.sphere.center - p;
         let d2 = to_centre.length_squared();
@@ -226,6 +226,7 @@ impl SphereLight {
     }
 
     /// A direction from `p` towards the light; `side` as for [`SphereLight::pdf`].
+    #[inline(always)]
     pub fn sample(&self, p: DVec3, side: DVec3, u: (f64, f64)) -> Option<LightSample> {
         let (wi, pdf, point) = match self.strategy(p, side) {
             Strategy::Inside => (warp::uniform_sphere(u), warp::UNIFORM_SPHERE_PDF, None),
@@ -318,6 +319,7 @@ impl SphereLight {
 
     /// A point uniform on `cap` by area, seen from `p`: (direction, point, solid-angle pdf);
     /// None on the back of the sphere, which its front hides.
+    #[inline(always)]
     fn sample_cap_area(&self, cap: &Cap, p: DVec3, u: (f64, f64)) -> Option<(DVec3, DVec3, f64)> {
         // Uniform in area on a cap is uniform in its height: the cone warp's z.
         let n = cap.frame.to_world(warp::uniform_cone(u, cap.h));
@@ -333,6 +335,7 @@ impl SphereLight {
     }
 
     /// The solid-angle pdf of [`SphereLight::sample_cap_area`] for the point `x` seen from `p`.
+    #[inline(always)]
     fn cap_area_pdf(&self, cap: &Cap, p: DVec3, x: DVec3) -> f64 {
         if !self.in_cap(cap, x) {
             return 0.0;

@@ -82,7 +82,7 @@ impl Material {
 
     /// Sample an incident direction for outgoing `wo` (unit, pointing away from the surface) at a
     /// surface with geometric normal `n`. `u_lobe` picks between reflection and refraction.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wo: DVec3, n: DVec3, u_lobe: f64, u: (f64, f64)) -> Option<BsdfSample> {
         let cos_o = wo.dot(n);
         match self.kind {

@@ -81,7 +81,7 @@ impl Sampler {
         self.rays
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn get_1d(&mut self) -> f64 {
         match &mut self.source {
             Source::Independent(rng) => rng.next_f64(),
@@ -118,7 +118,7 @@ impl Sampler {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn get_2d(&mut self) -> (f64, f64) {
         match &mut self.source {
             Source::Independent(rng) => (rng.next_f64(), rng.next_f64()),

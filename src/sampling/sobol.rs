@@ -120,7 +120,7 @@ impl PaddedSobol {
     }
 
     /// Dimensions (2 dim, 2 dim + 1) of this sample.
-    #[inline]
+    #[inline(always)]
     pub fn get_2d(&self, dim: u32) -> (f64, f64) {
         let h = self.seeds(dim);
         // Nested uniform scramble of the index: owen_scramble(index), with the reversal hoisted.
@@ -140,7 +140,7 @@ impl PaddedSobol {
     }
 
     /// A 1D sample: the van der Corput dimension of its own shuffled, scrambled pair.
-    #[inline]
+    #[inline(always)]
     pub fn get_1d(&self, dim: u32) -> f64 {
         let h = self.seeds(dim);
         let shuffled = laine_karras(self.rev_index, h as u32).reverse_bits();
