@@ -441,12 +441,12 @@ pub struct RowScratch {
 /// one by one for `painterly`; `path` and `naive` trace the row's paths side by side with batched
 /// closest-hit queries (the same image bit for bit, faster).
 ///
-/// Runs a copy compiled for x86-64-v3 (AVX2, FMA, BMI1/2, LZCNT) where the CPU has it, the
-/// portable one elsewhere; the integrators' hot functions are `#[inline(always)]` so both copies
-/// hold all of the shading. Rust never contracts a multiply and an add into an FMA, so the two
+/// Runs a copy compiled for x86-64-v3 where the CPU has it, the build's own elsewhere
+/// ([`ShadingCode`]). The integrators' hot functions are `#[inline(always)]` so both copies hold
+/// all of the shading. Rust never contracts a multiply and an add into an FMA, so the copies
 /// give the same bits (checked by `rows_traced_side_by_side_match_paths_traced_alone`). Measured
-/// on an AMD EPYC (Zen 4), cornell 320x240, 2 threads: the inlining alone 10% faster, the v3 copy
-/// 5% more (README, performance).
+/// on an AMD EPYC (Zen 4), cornell 320x240, 2 threads: the inlining alone 10% faster, the v3
+/// copy 5% more (README, performance).
 #[allow(clippy::too_many_arguments)]
 pub fn sample_row(
     scene: &Scene,
@@ -458,22 +458,58 @@ pub fn sample_row(
     scratch: &mut RowScratch,
     out: &mut Vec<(DVec3, u32)>,
 ) {
-    #[cfg(target_arch = "x86_64")]
-    if has_v3() {
-        // SAFETY: the CPU has every feature the function is compiled for (checked above).
-        unsafe { sample_row_v3(scene, settings, y, pass, map, caustics, scratch, out) };
-        return;
+    // SAFETY: `ShadingCode::detect` found every feature the copy is compiled for.
+    match ShadingCode::detect() {
+        #[cfg(target_arch = "x86_64")]
+        ShadingCode::V3 => unsafe {
+            sample_row_v3(scene, settings, y, pass, map, caustics, scratch, out)
+        },
+        _ => sample_row_body(scene, settings, y, pass, map, caustics, scratch, out),
     }
-    sample_row_body(scene, settings, y, pass, map, caustics, scratch, out)
 }
 
-/// Whether the CPU has what [`sample_row_v3`] is compiled for (the check is a cached load).
-#[cfg(target_arch = "x86_64")]
-fn has_v3() -> bool {
-    use std::arch::is_x86_feature_detected as has;
-    has!("avx2") && has!("fma") && has!("bmi1") && has!("bmi2") && has!("lzcnt") && has!("popcnt")
+/// Which compiled copy of the row tracer ([`sample_row`]) this CPU runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadingCode {
+    /// x86-64-v3: AVX2, FMA, BMI1/2, LZCNT, POPCNT.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    V3,
+    /// What the build targets (x86-64's SSE2 without a `target-cpu`).
+    Portable,
 }
 
+impl ShadingCode {
+    /// The best copy this CPU can run (detected once).
+    pub fn detect() -> Self {
+        static CODE: std::sync::OnceLock<ShadingCode> = std::sync::OnceLock::new();
+        *CODE.get_or_init(|| {
+            #[cfg(target_arch = "x86_64")]
+            {
+                use std::arch::is_x86_feature_detected as has;
+                let v3 = has!("avx2")
+                    && has!("fma")
+                    && has!("bmi1")
+                    && has!("bmi2")
+                    && has!("lzcnt")
+                    && has!("popcnt");
+                if v3 {
+                    return ShadingCode::V3;
+                }
+            }
+            ShadingCode::Portable
+        })
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ShadingCode::V3 => "x86-64-v3",
+            ShadingCode::Portable => "portable",
+        }
+    }
+}
+
+/// `sample_row_body` compiled for x86-64-v3: callable only where [`ShadingCode::detect`] found
+/// its features.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
 #[allow(clippy::too_many_arguments)]

@@ -70,7 +70,8 @@ pub fn summary(r: &Renderer) -> String {
     let st = r.stats();
     let err = r.error_estimate();
     format!(
-        "{name}: {w}x{h}, {spp}, {integ} integrator, seed {seed}, {threads} threads\n\
+        "{name}: {w}x{h}, {spp}, {integ} integrator, seed {seed}, {threads} threads, {code} \
+         code\n\
          time {time:.2} s (scene build {build:.1} ms), {rate:.2} M samples/s, {rays:.1} M rays, \
          invalid samples {invalid}\n\
          {report}; caustics: {caustics}{light_paths}\n\
@@ -87,6 +88,7 @@ pub fn summary(r: &Renderer) -> String {
         },
         seed = s.seed,
         threads = r.threads(),
+        code = crate::render::ShadingCode::detect().name(),
         time = st.elapsed.as_secs_f64(),
         build = r.scene.report.build_time.as_secs_f64() * 1e3,
         rate = st.samples_per_second() / 1e6,
