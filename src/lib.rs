@@ -13,6 +13,7 @@ pub mod camera;
 pub mod check;
 pub mod cli;
 pub mod convergence;
+pub mod cpu;
 pub mod error_map;
 pub mod film;
 pub mod geometry;

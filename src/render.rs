@@ -6,6 +6,7 @@
 //! index, so no pixel ever reuses a random stream.
 
 use crate::adaptive::{SampleMap, PILOT_PASSES};
+use crate::cpu::ShadingCode;
 use crate::film::{ErrorEstimate, Film};
 use crate::integrator;
 use crate::integrator::caustics::{CausticPass, CausticTracer, PassSplats};
@@ -465,46 +466,6 @@ pub fn sample_row(
             sample_row_v3(scene, settings, y, pass, map, caustics, scratch, out)
         },
         _ => sample_row_body(scene, settings, y, pass, map, caustics, scratch, out),
-    }
-}
-
-/// Which compiled copy of the row tracer ([`sample_row`]) this CPU runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ShadingCode {
-    /// x86-64-v3: AVX2, FMA, BMI1/2, LZCNT, POPCNT.
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-    V3,
-    /// What the build targets (x86-64's SSE2 without a `target-cpu`).
-    Portable,
-}
-
-impl ShadingCode {
-    /// The best copy this CPU can run (detected once).
-    pub fn detect() -> Self {
-        static CODE: std::sync::OnceLock<ShadingCode> = std::sync::OnceLock::new();
-        *CODE.get_or_init(|| {
-            #[cfg(target_arch = "x86_64")]
-            {
-                use std::arch::is_x86_feature_detected as has;
-                let v3 = has!("avx2")
-                    && has!("fma")
-                    && has!("bmi1")
-                    && has!("bmi2")
-                    && has!("lzcnt")
-                    && has!("popcnt");
-                if v3 {
-                    return ShadingCode::V3;
-                }
-            }
-            ShadingCode::Portable
-        })
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            ShadingCode::V3 => "x86-64-v3",
-            ShadingCode::Portable => "portable",
-        }
     }
 }
 

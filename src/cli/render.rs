@@ -88,7 +88,7 @@ pub fn summary(r: &Renderer) -> String {
         },
         seed = s.seed,
         threads = r.threads(),
-        code = crate::render::ShadingCode::detect().name(),
+        code = crate::cpu::ShadingCode::detect().name(),
         time = st.elapsed.as_secs_f64(),
         build = r.scene.report.build_time.as_secs_f64() * 1e3,
         rate = st.samples_per_second() / 1e6,

@@ -34,6 +34,7 @@
 //! pixel, so the sum is the same bit for bit whatever the thread count.
 
 use crate::camera::Camera;
+use crate::cpu::ShadingCode;
 use crate::geometry::{spawn_origin, Hit, Sphere};
 use crate::light::{sphere::on_cap, Light};
 use crate::math::{luminance, DVec3, Frame, Ray};
@@ -585,26 +586,42 @@ impl CausticTracer {
         let chunks = self.light_paths.div_ceil(CHUNK);
         let parts: Vec<PassSplats> = (0..chunks)
             .into_par_iter()
-            .map(|c| {
-                let mut out = PassSplats::default();
-                let end = ((c + 1) * CHUNK).min(self.light_paths);
-                // At least one: a chunk whose ends were all dropped could never be picked, and
-                // its share of the joins would be lost (a last chunk of one path, a tiny image).
-                let cap = ((end - c * CHUNK) as f64 * VERTICES_PER_PATH) as usize;
-                let mut reservoir = Reservoir::new(
-                    cap.max(1),
-                    Rng::for_sample(seed ^ SALT ^ RESERVOIR_SALT, c, pass as u64),
-                );
-                for i in c * CHUNK..end {
-                    let mut rng = Rng::for_sample(seed ^ SALT, i, pass as u64);
-                    self.trace(scene, &mut rng, &mut out, &mut reservoir);
-                    out.paths += 1;
-                }
-                reservoir.close(&mut out);
-                out
+            .map(|c| match ShadingCode::detect() {
+                // SAFETY: `ShadingCode::detect` found every feature the copy is compiled for.
+                #[cfg(target_arch = "x86_64")]
+                ShadingCode::V3 => unsafe { self.trace_chunk_v3(scene, seed, pass, c) },
+                _ => self.trace_chunk(scene, seed, pass, c),
             })
             .collect();
         merge(parts)
+    }
+
+    /// Chunk `c` of pass `pass`'s light paths.
+    #[inline(always)]
+    fn trace_chunk(&self, scene: &Scene, seed: u64, pass: u32, c: u64) -> PassSplats {
+        let mut out = PassSplats::default();
+        let end = ((c + 1) * CHUNK).min(self.light_paths);
+        // At least one: a chunk whose ends were all dropped could never be picked, and
+        // its share of the joins would be lost (a last chunk of one path, a tiny image).
+        let cap = ((end - c * CHUNK) as f64 * VERTICES_PER_PATH) as usize;
+        let mut reservoir = Reservoir::new(
+            cap.max(1),
+            Rng::for_sample(seed ^ SALT ^ RESERVOIR_SALT, c, pass as u64),
+        );
+        for i in c * CHUNK..end {
+            let mut rng = Rng::for_sample(seed ^ SALT, i, pass as u64);
+            self.trace(scene, &mut rng, &mut out, &mut reservoir);
+            out.paths += 1;
+        }
+        reservoir.close(&mut out);
+        out
+    }
+
+    /// [`CausticTracer::trace_chunk`] compiled for x86-64-v3 ([`ShadingCode`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn trace_chunk_v3(&self, scene: &Scene, seed: u64, pass: u32, c: u64) -> PassSplats {
+        self.trace_chunk(scene, seed, pass, c)
     }
 
     /// Whether a pass's kept light-path ends outgrow the core's cache (more than 1 MiB at
@@ -637,6 +654,7 @@ impl CausticTracer {
     /// first diffuse hit y seen by the camera; then bounce once off y, and if that reaches another
     /// diffuse hit x through one or more specular bounces, splat x too (a caustic of a caustic:
     /// cornell's floor caustic seen through the glass ball from the ceiling and walls).
+    #[inline(always)]
     fn trace(&self, scene: &Scene, rng: &mut Rng, out: &mut PassSplats, kept: &mut Reservoir) {
         let e = *self.pick_emitter(rng.next_f64());
         let light = &scene.lights.lights[e.light];
@@ -1171,6 +1189,32 @@ mod tests {
         let dof = (cells.len() - 1) as f64;
         let z = (chi2 - dof) / (2.0 * dof).sqrt();
         assert!(z < 5.0, "chi2 {chi2:.1} on {dof} dof (z {z:.2}): {cells:?}");
+    }
+
+    /// The light tracer's x86-64-v3 copy leaves the same splats and ends, bit for bit, as the
+    /// portable one (where this CPU can run it).
+    #[test]
+    fn the_fast_copy_of_a_chunk_matches_the_portable_one() {
+        #[cfg(target_arch = "x86_64")]
+        if ShadingCode::detect() == ShadingCode::V3 {
+            for name in ["cornell", "cornell-small-light"] {
+                let scene = crate::scene::load(name).expect("built-in scene");
+                let mut settings = RenderSettings::merged(&[&scene.render]);
+                (settings.width, settings.height) = (64, 48);
+                let tracer = CausticTracer::new(&scene, &settings).expect("a tracer");
+                for (pass, c) in [(0, 0), (3, 0)] {
+                    let portable = tracer.trace_chunk(&scene, 9, pass, c);
+                    // SAFETY: the CPU has the features (checked above).
+                    let fast = unsafe { tracer.trace_chunk_v3(&scene, 9, pass, c) };
+                    assert!(portable.paths > 0 && !portable.splats.is_empty());
+                    assert_eq!(
+                        format!("{portable:?}"),
+                        format!("{fast:?}"),
+                        "{name} {pass}"
+                    );
+                }
+            }
+        }
     }
 
     fn dummy_tracer() -> CausticTracer {

@@ -1,0 +1,46 @@
+//! Which of the hot loops' compiled copies the CPU can run. The row tracer
+//! (`render::sample_row`) and the light tracer's chunks (`CausticTracer::trace_pass`) each have a
+//! copy compiled for x86-64-v3, with the shading `#[inline(always)]` into it, chosen at run time
+//! so the default build still runs on any x86-64. Rust never contracts a multiply and an add into
+//! an FMA, so every copy gives the same bits.
+
+/// Which compiled copy of the hot loops (`render::sample_row`, the light tracer's chunks) this
+/// CPU runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadingCode {
+    /// x86-64-v3: AVX2, FMA, BMI1/2, LZCNT, POPCNT.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    V3,
+    /// What the build targets (x86-64's SSE2 without a `target-cpu`).
+    Portable,
+}
+
+impl ShadingCode {
+    /// The best copy this CPU can run (detected once).
+    pub fn detect() -> Self {
+        static CODE: std::sync::OnceLock<ShadingCode> = std::sync::OnceLock::new();
+        *CODE.get_or_init(|| {
+            #[cfg(target_arch = "x86_64")]
+            {
+                use std::arch::is_x86_feature_detected as has;
+                let v3 = has!("avx2")
+                    && has!("fma")
+                    && has!("bmi1")
+                    && has!("bmi2")
+                    && has!("lzcnt")
+                    && has!("popcnt");
+                if v3 {
+                    return ShadingCode::V3;
+                }
+            }
+            ShadingCode::Portable
+        })
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ShadingCode::V3 => "x86-64-v3",
+            ShadingCode::Portable => "portable",
+        }
+    }
+}
