@@ -296,7 +296,7 @@ impl PathState {
             let join = if c.tracer.large_passes() {
                 join
             } else {
-                let u = sampler.get_1d_if(here);
+                let u = sampler.get_1d_hashed_if(here);
                 here.then(|| c.pick_index(u)).flatten()
             };
             if let (Some(join), true) = (join, here) {
@@ -349,7 +349,7 @@ fn joinable(caustics: Option<CausticPass>) -> Option<CausticPass> {
 #[inline]
 fn pick_ahead(caustics: Option<CausticPass>, sampler: &mut Sampler) -> Option<(u32, f64)> {
     let c = joinable(caustics).filter(|c| c.tracer.large_passes())?;
-    let (k, rest) = c.pick_index(sampler.get_1d())?;
+    let (k, rest) = c.pick_index(sampler.get_1d_hashed())?;
     c.prefetch(k);
     Some((k, rest))
 }

@@ -146,6 +146,18 @@ impl PaddedSobol {
         let shuffled = laine_karras(self.rev_index, h as u32).reverse_bits();
         laine_karras(shuffled, (mix64(h) >> 32) as u32).reverse_bits() as f64 * TO_UNIT
     }
+
+    /// Dimension `dim` as an independent uniform number, outside the sequence: one hash of
+    /// (pixel, replicate, sample, dim) instead of the scrambled point's three hashes and two bit
+    /// reversals (~15 instructions instead of ~100). For numbers stratification does nothing
+    /// for. The hash's input is one-to-one in (dim, sample): dim x an odd constant fixes the low
+    /// 32 bits, the reversed sample index only the high ones.
+    #[inline(always)]
+    pub fn get_1d_hashed(&self, dim: u32) -> f64 {
+        let key =
+            (dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ ((self.rev_index as u64) << 32);
+        (mix64(self.pixel_seed ^ key) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
 }
 
 #[cfg(test)]
@@ -240,6 +252,34 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// The hashed numbers are uniform, and a pixel's consecutive samples and dimensions are
+    /// independent: chi-square over 16 x 16 cells of (sample s, dim d) against (s + 1, d) and
+    /// against (s, d + 1), over many pixels.
+    #[test]
+    fn hashed_numbers_are_uniform_and_independent() {
+        for (ds, dd) in [(1u64, 0u32), (0, 1)] {
+            let mut cells = [0u32; 256];
+            let n = 128_000u64;
+            for p in 0..n / 8 {
+                for s in 0..8u64 {
+                    let a = PaddedSobol::new(3, p, 2 * s).get_1d_hashed(5);
+                    let b = PaddedSobol::new(3, p, 2 * (s + ds)).get_1d_hashed(5 + dd);
+                    cells[(a * 16.0) as usize * 16 + (b * 16.0) as usize] += 1;
+                }
+            }
+            let expected = n as f64 / 256.0;
+            let chi2: f64 = cells
+                .iter()
+                .map(|&c| (c as f64 - expected).powi(2) / expected)
+                .sum();
+            // 255 degrees of freedom: mean 255, sd 22.6; fail beyond 5 sd.
+            assert!(
+                chi2 < 255.0 + 5.0 * 22.6,
+                "shift ({ds}, {dd}): chi2 {chi2:.1}"
+            );
         }
     }
 
