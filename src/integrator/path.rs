@@ -346,7 +346,7 @@ fn joinable(caustics: Option<CausticPass>) -> Option<CausticPass> {
 /// On large passes (`CausticTracer::large_passes`), choose the end the path's next vertex
 /// joins to and start loading it. Drawn for every ray a path goes on with (the next vertex may
 /// be a delta one that joins nothing), so each path keeps its numbers whatever it hits.
-#[inline]
+#[inline(always)]
 fn pick_ahead(caustics: Option<CausticPass>, sampler: &mut Sampler) -> Option<(u32, f64)> {
     let c = joinable(caustics).filter(|c| c.tracer.large_passes())?;
     let (k, rest) = c.pick_index(sampler.get_1d_hashed())?;
