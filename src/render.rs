@@ -258,6 +258,13 @@ impl Renderer {
         self.stats.light_paths += splats.paths;
         let splats = &splats;
         let caustics = self.caustics.as_ref().map(|tracer| splats.pass(tracer));
+        let pass_rows = PassRows {
+            scene,
+            settings,
+            pass,
+            map,
+            caustics,
+        };
         let film = &mut self.film;
         self.pool.install(|| {
             film.par_bands(band_rows).for_each(|mut band| {
@@ -273,7 +280,7 @@ impl Renderer {
                             break;
                         }
                         let y = band.first_row + row;
-                        sample_row(scene, settings, y, pass, map, caustics, scratch, values);
+                        sample_row(&pass_rows, y, scratch, values);
                         // Each of a pixel's samples of this pass gets the pass's splats: each sum
                         // is an unbiased estimate (they share the splats' noise, which is why the
                         // error is then read from the half-buffers, split by pass).
@@ -437,7 +444,18 @@ pub struct RowScratch {
     pub plan: Vec<(u32, u64)>,
 }
 
-/// The samples of every pixel of row `y` in pass `pass` (one each, or as `map` says) into `out`
+/// What every row of one pass shares: the scene, the settings, the pass, its adaptive map (none
+/// before the pilot ends) and its light tracer's splats and ends.
+#[derive(Clone, Copy)]
+pub struct PassRows<'a> {
+    pub scene: &'a Scene,
+    pub settings: &'a RenderSettings,
+    pub pass: u32,
+    pub map: Option<&'a SampleMap>,
+    pub caustics: Option<CausticPass<'a>>,
+}
+
+/// The samples of every pixel of row `y` in pass `rows.pass` (one each, or as its map says) into `out`
 /// (radiance and closest-hit queries), in the order of `scratch.plan`: [`sample_pixel_counted`]
 /// one by one for `painterly`; `path` and `naive` trace the row's paths side by side with batched
 /// closest-hit queries (the same image bit for bit, faster).
@@ -448,24 +466,12 @@ pub struct RowScratch {
 /// give the same bits (checked by `rows_traced_side_by_side_match_paths_traced_alone`). Measured
 /// on an AMD EPYC (Zen 4), cornell 320x240, 2 threads: the inlining alone 10% faster, the v3
 /// copy 5% more (README, performance).
-#[allow(clippy::too_many_arguments)]
-pub fn sample_row(
-    scene: &Scene,
-    settings: &RenderSettings,
-    y: u32,
-    pass: u32,
-    map: Option<&SampleMap>,
-    caustics: Option<CausticPass>,
-    scratch: &mut RowScratch,
-    out: &mut Vec<(DVec3, u32)>,
-) {
+pub fn sample_row(rows: &PassRows, y: u32, scratch: &mut RowScratch, out: &mut Vec<(DVec3, u32)>) {
     // SAFETY: `ShadingCode::detect` found every feature the copy is compiled for.
     match ShadingCode::detect() {
         #[cfg(target_arch = "x86_64")]
-        ShadingCode::V3 => unsafe {
-            sample_row_v3(scene, settings, y, pass, map, caustics, scratch, out)
-        },
-        _ => sample_row_body(scene, settings, y, pass, map, caustics, scratch, out),
+        ShadingCode::V3 => unsafe { sample_row_v3(rows, y, scratch, out) },
+        _ => sample_row_body(rows, y, scratch, out),
     }
 }
 
@@ -473,32 +479,24 @@ pub fn sample_row(
 /// its features.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-#[allow(clippy::too_many_arguments)]
 unsafe fn sample_row_v3(
-    scene: &Scene,
-    settings: &RenderSettings,
+    rows: &PassRows,
     y: u32,
-    pass: u32,
-    map: Option<&SampleMap>,
-    caustics: Option<CausticPass>,
     scratch: &mut RowScratch,
     out: &mut Vec<(DVec3, u32)>,
 ) {
-    sample_row_body(scene, settings, y, pass, map, caustics, scratch, out)
+    sample_row_body(rows, y, scratch, out)
 }
 
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn sample_row_body(
-    scene: &Scene,
-    settings: &RenderSettings,
-    y: u32,
-    pass: u32,
-    map: Option<&SampleMap>,
-    caustics: Option<CausticPass>,
-    scratch: &mut RowScratch,
-    out: &mut Vec<(DVec3, u32)>,
-) {
+fn sample_row_body(rows: &PassRows, y: u32, scratch: &mut RowScratch, out: &mut Vec<(DVec3, u32)>) {
+    let PassRows {
+        scene,
+        settings,
+        pass,
+        map,
+        caustics,
+    } = *rows;
     scratch.plan.clear();
     match map {
         None => scratch
@@ -623,16 +621,14 @@ mod tests {
                         .zip(splats.as_ref())
                         .map(|(tracer, s)| s.pass(tracer));
                     for y in [0, 13, 29] {
-                        sample_row(
-                            &scene,
-                            &settings,
-                            y,
+                        let rows = PassRows {
+                            scene: &scene,
+                            settings: &settings,
                             pass,
                             map,
                             caustics,
-                            &mut scratch,
-                            &mut row,
-                        );
+                        };
+                        sample_row(&rows, y, &mut scratch, &mut row);
                         let expected: Vec<(u32, u64)> = (0..40)
                             .flat_map(|x| {
                                 let (first, n) =
@@ -645,16 +641,7 @@ mod tests {
                         // The portable copy, which this machine may not run (it has the
                         // features of the fast one), gives the same bits.
                         let mut portable = Vec::new();
-                        sample_row_body(
-                            &scene,
-                            &settings,
-                            y,
-                            pass,
-                            map,
-                            caustics,
-                            &mut RowScratch::default(),
-                            &mut portable,
-                        );
+                        sample_row_body(&rows, y, &mut RowScratch::default(), &mut portable);
                         assert_eq!(
                             portable
                                 .iter()

@@ -83,13 +83,7 @@ impl Sampler {
 
     #[inline(always)]
     pub fn get_1d(&mut self) -> f64 {
-        match &mut self.source {
-            Source::Independent(rng) => rng.next_f64(),
-            Source::Sobol(s) => {
-                self.dim += 1;
-                s.get_1d(self.dim)
-            }
-        }
+        self.draw_1d(true, false)
     }
 
     /// A uniform number that takes a dimension like [`Sampler::get_1d`] but, with Sobol
@@ -98,43 +92,41 @@ impl Sampler {
     /// light-path ends, which lie in random order.
     #[inline(always)]
     pub fn get_1d_hashed(&mut self) -> f64 {
-        match &mut self.source {
-            Source::Independent(rng) => rng.next_f64(),
-            Source::Sobol(s) => {
-                self.dim += 1;
-                s.get_1d_hashed(self.dim)
-            }
-        }
+        self.draw_1d(true, true)
     }
 
     /// [`Sampler::get_1d_hashed`] when `used`, else passed over as in [`Sampler::get_1d_if`].
     #[inline(always)]
     pub fn get_1d_hashed_if(&mut self, used: bool) -> f64 {
-        match &mut self.source {
-            Source::Sobol(_) if !used => {
-                self.dim += 1;
-                0.5
-            }
-            _ => self.get_1d_hashed(),
-        }
+        self.draw_1d(used, true)
     }
 
     /// [`Sampler::get_1d`] when `used`; otherwise the dimension is passed over without computing
     /// its value (Sobol points are per dimension; the independent stream still draws, so its
     /// later numbers stay where they were) and the value returned is meaningless.
-    #[inline]
+    #[inline(always)]
     pub fn get_1d_if(&mut self, used: bool) -> f64 {
+        self.draw_1d(used, false)
+    }
+
+    /// One dimension: drawn if `used` (from the sequence, or `hashed`), else passed over.
+    #[inline(always)]
+    fn draw_1d(&mut self, used: bool, hashed: bool) -> f64 {
         match &mut self.source {
-            Source::Sobol(_) if !used => {
+            Source::Independent(rng) => rng.next_f64(),
+            Source::Sobol(s) => {
                 self.dim += 1;
-                0.5
+                match (used, hashed) {
+                    (false, _) => 0.5,
+                    (true, false) => s.get_1d(self.dim),
+                    (true, true) => s.get_1d_hashed(self.dim),
+                }
             }
-            _ => self.get_1d(),
         }
     }
 
     /// [`Sampler::get_2d`] when `used`, else passed over as in [`Sampler::get_1d_if`].
-    #[inline]
+    #[inline(always)]
     pub fn get_2d_if(&mut self, used: bool) -> (f64, f64) {
         match &mut self.source {
             Source::Sobol(_) if !used => {
