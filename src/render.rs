@@ -431,8 +431,9 @@ thread_local! {
 /// the vector units busy (a 320-pixel row is 320), few enough that a thread's stream buffers
 /// stay ~2.4 MB whatever the image's width and the adaptive map (`path`: 448 bytes of path,
 /// sampler and shadow rays, up to 3 rays of 116 in each of two batches, the round's and the
-/// next's (56 as pushed, 60 in columns and answers), the plan's 16 and the result's 32). The unit tests' 40-pixel rows are cut in
-/// pieces too, so they check that the pieces' joins change no sample.
+/// next's (56 as pushed, 60 in columns and answers), the plan's 16 and the result's 32). The
+/// unit tests' 40-pixel rows are cut in pieces too, so they check that the pieces' joins change
+/// no sample.
 const STREAM_SAMPLES: usize = if cfg!(test) { 24 } else { 2048 };
 
 /// Per-thread scratch for [`sample_row`].
@@ -455,10 +456,10 @@ pub struct PassRows<'a> {
     pub caustics: Option<CausticPass<'a>>,
 }
 
-/// The samples of every pixel of row `y` in pass `rows.pass` (one each, or as its map says) into `out`
-/// (radiance and closest-hit queries), in the order of `scratch.plan`: [`sample_pixel_counted`]
-/// one by one for `painterly`; `path` and `naive` trace the row's paths side by side with batched
-/// closest-hit queries (the same image bit for bit, faster).
+/// The samples of every pixel of row `y` in pass `rows.pass` (one each, or as its map says)
+/// into `out` (radiance and closest-hit queries), in the order of `scratch.plan`:
+/// [`sample_pixel_counted`] one by one for `painterly`; `path` and `naive` trace the row's paths
+/// side by side with batched closest-hit queries (the same image bit for bit, faster).
 ///
 /// Runs a copy compiled for x86-64-v3 where the CPU has it, the build's own elsewhere
 /// ([`ShadingCode`]). The integrators' hot functions are `#[inline(always)]` so both copies hold
