@@ -4,6 +4,19 @@
 //! so the default build still runs on any x86-64. Rust never contracts a multiply and an add into
 //! an FMA, so every copy gives the same bits.
 
+/// Defines a function compiled for x86-64-v3 (only on x86-64): the features named here are the
+/// ones [`ShadingCode::detect`] checks, so the two lists live side by side. Call it only when
+/// `detect` returns [`ShadingCode::V3`].
+macro_rules! v3_copy {
+    ($(#[$meta:meta])* $vis:vis unsafe fn $($rest:tt)*) => {
+        $(#[$meta])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+        $vis unsafe fn $($rest)*
+    };
+}
+pub(crate) use v3_copy;
+
 /// Which compiled copy of the hot loops (`render::sample_row`, the light tracer's chunks) this
 /// CPU runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,6 +36,7 @@ impl ShadingCode {
             #[cfg(target_arch = "x86_64")]
             {
                 use std::arch::is_x86_feature_detected as has;
+                // The features `v3_copy!` compiles for.
                 let v3 = has!("avx2")
                     && has!("fma")
                     && has!("bmi1")

@@ -6,7 +6,7 @@
 //! index, so no pixel ever reuses a random stream.
 
 use crate::adaptive::{SampleMap, PILOT_PASSES};
-use crate::cpu::ShadingCode;
+use crate::cpu::{v3_copy, ShadingCode};
 use crate::film::{ErrorEstimate, Film};
 use crate::integrator;
 use crate::integrator::caustics::{CausticPass, CausticTracer, PassSplats};
@@ -476,17 +476,17 @@ pub fn sample_row(rows: &PassRows, y: u32, scratch: &mut RowScratch, out: &mut V
     }
 }
 
-/// `sample_row_body` compiled for x86-64-v3: callable only where [`ShadingCode::detect`] found
-/// its features.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-unsafe fn sample_row_v3(
-    rows: &PassRows,
-    y: u32,
-    scratch: &mut RowScratch,
-    out: &mut Vec<(DVec3, u32)>,
-) {
-    sample_row_body(rows, y, scratch, out)
+v3_copy! {
+    /// `sample_row_body` compiled for x86-64-v3: callable only where [`ShadingCode::detect`]
+    /// found its features.
+    unsafe fn sample_row_v3(
+        rows: &PassRows,
+        y: u32,
+        scratch: &mut RowScratch,
+        out: &mut Vec<(DVec3, u32)>,
+    ) {
+        sample_row_body(rows, y, scratch, out)
+    }
 }
 
 #[inline(always)]

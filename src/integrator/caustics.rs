@@ -34,7 +34,7 @@
 //! pixel, so the sum is the same bit for bit whatever the thread count.
 
 use crate::camera::Camera;
-use crate::cpu::ShadingCode;
+use crate::cpu::{v3_copy, ShadingCode};
 use crate::geometry::{spawn_origin, Hit, Sphere};
 use crate::light::{sphere::on_cap, Light};
 use crate::math::{luminance, DVec3, Frame, Ray};
@@ -617,11 +617,17 @@ impl CausticTracer {
         out
     }
 
-    /// [`CausticTracer::trace_chunk`] compiled for x86-64-v3 ([`ShadingCode`]).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    unsafe fn trace_chunk_v3(&self, scene: &Scene, seed: u64, pass: u32, c: u64) -> PassSplats {
-        self.trace_chunk(scene, seed, pass, c)
+    v3_copy! {
+        /// [`CausticTracer::trace_chunk`] compiled for x86-64-v3 ([`ShadingCode`]).
+        unsafe fn trace_chunk_v3(
+            &self,
+            scene: &Scene,
+            seed: u64,
+            pass: u32,
+            c: u64,
+        ) -> PassSplats {
+            self.trace_chunk(scene, seed, pass, c)
+        }
     }
 
     /// Whether a pass's kept light-path ends outgrow the core's cache (more than 1 MiB at
