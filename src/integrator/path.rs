@@ -471,7 +471,8 @@ fn connect_caustic(
     let bound = max_component(beta * material.f_cos_bound() * my.f_cos_bound() * v.alpha())
         * (share / d2)
         * (1.0 + 1e-9);
-    if u_rr * c.tracer.connect_threshold >= bound {
+    let roll = u_rr * c.tracer.connect_threshold;
+    if roll >= bound {
         return None;
     }
     // Of those left, most lose it still once the two cosines join the bound (both BSDFs are
@@ -486,7 +487,7 @@ fn connect_caustic(
     }
     let n_y = v.normal();
     let cos_y = (-dir).dot(n_y);
-    if u_rr * c.tracer.connect_threshold >= bound * (cos_x.abs() * cos_y.abs()) {
+    if roll >= bound * (cos_x.abs() * cos_y.abs()) {
         return None;
     }
     let e_x = material.eval(wo, dir, hit.n);
