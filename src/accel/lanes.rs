@@ -95,6 +95,7 @@ impl RayBatch {
 
     /// Pad the rays to a whole number of groups (the padding rays' answers are never read) and
     /// size the outputs, every ray starting with no hit before its `t_max`.
+    #[inline(always)]
     fn prepare(&mut self) {
         let padded = self.rays.len().div_ceil(LANES) * LANES;
         let rays = &self.rays;
@@ -258,7 +259,6 @@ impl SphereLanes {
     /// but with the lanes across eight rays, which share no dependency chain, and one sphere at
     /// a time: no horizontal minimum, no padding spheres.
     pub fn closest_batch(&self, batch: &mut RayBatch) {
-        batch.prepare();
         #[cfg(target_arch = "x86_64")]
         if self.avx512 {
             // SAFETY: `avx512` is only set when the running CPU reports AVX-512F.
@@ -284,8 +284,10 @@ impl SphereLanes {
         self.closest_batch_portable(batch)
     }
 
+    /// Each copy spreads the rays into columns itself, in its own instructions.
     #[inline(always)]
     fn closest_batch_portable(&self, batch: &mut RayBatch) {
+        batch.prepare();
         let b = batch;
         let groups =
             b.ox.chunks_exact(LANES)
@@ -417,11 +419,9 @@ mod tests {
             #[cfg(target_arch = "x86_64")]
             if has_avx2() {
                 let (t, prim) = (batch.t.clone(), batch.prim.clone());
-                batch.prepare();
                 // SAFETY: checked just above.
                 unsafe { lanes.closest_batch_avx2(&mut batch) };
                 assert_eq!((&t, &prim), (&batch.t, &batch.prim));
-                batch.prepare();
                 lanes.closest_batch_portable(&mut batch);
                 assert_eq!((&t, &prim), (&batch.t, &batch.prim));
             }

@@ -759,6 +759,7 @@ impl CausticTracer {
     /// beta f cos_y We / pdf_camera = beta f cos_y / (A_pixel cos^3 theta_c dist^2), over the
     /// light paths of the pass (the box-filtered pixel is 1 / A_pixel times the integral of
     /// the radiance over its footprint on the image plane at distance 1).
+    #[inline(always)]
     fn splat(&self, scene: &Scene, hit: &Hit, wo: DVec3, beta: DVec3, out: &mut PassSplats) {
         let cam = &self.camera;
         let to_cam = cam.position - hit.p;
@@ -825,6 +826,7 @@ impl CausticTracer {
     /// A direction from `y` uniform over the union of the cones towards the target spheres,
     /// counted with multiplicity: choose a cone in proportion to its solid angle, sample it, and
     /// the pdf is (number of cones holding the direction) / (sum of solid angles).
+    #[inline(always)]
     fn emission_direction(&self, y: DVec3, u: (f64, f64, f64)) -> Option<(DVec3, f64)> {
         let (cones, total) = self.cones(y);
         let cones = &cones[..self.targets.len()];
@@ -1037,6 +1039,7 @@ fn sphere_region(l: &crate::light::sphere::SphereLight, targets: &[Sphere]) -> (
 
 /// A point on the emitter's region, uniform by area: (point, outward normal, error bound, area
 /// pdf, emitted radiance).
+#[inline(always)]
 fn emission_point(
     light: &Light,
     region: Region,
