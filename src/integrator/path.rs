@@ -543,6 +543,11 @@ fn connect_caustic(
     if wo.dot(hit.n) * cos_x <= 0.0 {
         return None;
     }
+    // The bound with x's cosine alone (|cos_y| <= 1, so whatever this rejects the next test
+    // rejects too) saves decoding y's normal for the joins x's cosine already rules out.
+    if roll >= bound * cos_x.abs() {
+        return None;
+    }
     let n_y = v.normal();
     let cos_y = (-dir).dot(n_y);
     if roll >= bound * (cos_x.abs() * cos_y.abs()) {
