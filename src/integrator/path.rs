@@ -699,12 +699,12 @@ pub(crate) fn light_shadow(
 fn shadow_ray(scene: &Scene, hit: &Hit, ls: &LightSample) -> Ray {
     let wi = ls.wi;
     let o = spawn_origin(hit.p, hit.n, hit.err, wi);
-    let shape = &scene.prims[ls.prim as usize].shape;
     // A match, not `or_else`: the closure was compiled apart from the render's fast copy
     // (6.7% of cornell-small-light's time, whose cone samples carry no point).
     let target = match ls.point {
         Some(x) => Some(x),
         None => {
+            let shape = &scene.prims[ls.prim as usize].shape;
             let straight = Ray::new(o, wi);
             if shape
                 .as_sphere()
