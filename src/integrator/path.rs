@@ -448,8 +448,7 @@ impl Stream {
         self.active.extend(0..self.paths.len() as u32);
         self.batch.clear();
         for (path, sampler, _, _) in &mut self.paths {
-            sampler.count_ray();
-            self.batch.push(&path.ray, f64::INFINITY);
+            queue_rays(path, sampler, &Shadows::default(), true, &mut self.batch);
         }
         while !self.active.is_empty() {
             scene.intersect_batch(&mut self.batch);
@@ -475,18 +474,7 @@ impl Stream {
                     (prim != u32::MAX).then(|| scene.hit_at(&path.ray, self.batch.t[j], prim));
                 j += 1;
                 *go_on = path.vertex(scene, hit.as_ref(), sampler, max_depth, caustics, shadows);
-                let mut queued = false;
-                for s in shadows.iter() {
-                    sampler.count_ray();
-                    self.next_batch.push(&s.ray, s.t_max);
-                    queued = true;
-                }
-                if *go_on {
-                    sampler.count_ray();
-                    self.next_batch.push(&path.ray, f64::INFINITY);
-                    queued = true;
-                }
-                if queued {
+                if queue_rays(path, sampler, shadows, *go_on, &mut self.next_batch) {
                     self.next.push(i);
                 }
             }
@@ -495,6 +483,31 @@ impl Stream {
         }
         out.extend(self.paths.iter().map(|(p, s, _, _)| (p.l, s.rays())));
     }
+}
+
+/// Queue a path's rays for the next round, in the order a vertex asks for them: its shadow
+/// rays, then its own ray if it goes on (a new path: just its camera ray). Returns whether it
+/// queued any, i.e. whether the path has a next round.
+#[inline(always)]
+fn queue_rays(
+    path: &PathState,
+    sampler: &mut Sampler,
+    shadows: &Shadows,
+    go_on: bool,
+    batch: &mut RayBatch,
+) -> bool {
+    let mut queued = false;
+    for s in shadows.iter() {
+        sampler.count_ray();
+        batch.push(&s.ray, s.t_max);
+        queued = true;
+    }
+    if go_on {
+        sampler.count_ray();
+        batch.push(&path.ray, f64::INFINITY);
+        queued = true;
+    }
+    queued
 }
 
 /// Join the non-delta camera vertex `hit` to the pass's caustic vertex `join.0` (`join.1` a
