@@ -294,13 +294,16 @@ impl PathState {
             let second = self.caustic_end && self.at_first && self.delta_run > 0;
             self.at_first = self.depth == 0;
             self.caustic_end = self.at_first || second;
-            self.chains.at_surface(
-                self.delta_run,
-                self.specular,
-                self.prev_pdf_bsdf,
-                hit.n.dot(ray.d).abs(),
-                hit.t,
-            );
+            // The chains weigh lights against joins: without joins nothing reads them.
+            if connect.is_some() {
+                self.chains.at_surface(
+                    self.delta_run,
+                    self.specular,
+                    self.prev_pdf_bsdf,
+                    hit.n.dot(ray.d).abs(),
+                    hit.t,
+                );
+            }
             self.delta_run = 0;
         }
         self.depth < max_depth
@@ -367,13 +370,15 @@ impl PathState {
         };
         self.beta *= bs.weight;
         self.eta_scale *= bs.eta_scale;
-        self.chains.bounce(
-            material.is_delta(),
-            hit.n.dot(wo).abs(),
-            hit.n.dot(bs.wi).abs(),
-            bs.pdf,
-            || material.eval(bs.wi, wo, hit.n).pdf,
-        );
+        if joinable(caustics).is_some() {
+            self.chains.bounce(
+                material.is_delta(),
+                hit.n.dot(wo).abs(),
+                hit.n.dot(bs.wi).abs(),
+                bs.pdf,
+                || material.eval(bs.wi, wo, hit.n).pdf,
+            );
+        }
         self.specular = bs.delta;
         self.prev_pdf_bsdf = bs.pdf;
         self.prev_p = hit.p;
