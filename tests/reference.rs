@@ -136,46 +136,54 @@ fn adaptive_sampling_is_unbiased_and_estimates_its_error() {
 }
 
 /// Joins on an image large enough for large passes (`CausticTracer::large_passes`: each row
-/// picks its light-path ends a ray ahead, from its own window of them; 640x480 leaves ~40k ends
-/// a pass in 15 chunks, the window is 4k): the render, box-filtered 2x2 down to the reference's
+/// picks its light-path ends a ray ahead, from its own window of them; 960x720 leaves ~45k ends
+/// a pass in 17 chunks, the window is 4k): the render, box-filtered 3x3 down to the reference's
 /// pixels, matches it in the regions the joins light most (the floor's caustic seen through the
 /// glass ball, the ceiling by the lamp) and over the whole image, within 4 standard errors.
 /// (Where a window wraps round past the pass's last end, picks that found nothing put the whole
-/// image 3.4 standard errors dark here; the chi-square test of windowed picks in `caustics.rs`
-/// fails on that outright.)
+/// image 3.4 standard errors dark at 640x480 when that size made large passes; the chi-square
+/// test of windowed picks in `caustics.rs` fails on that outright.)
 #[test]
 fn joins_on_large_passes_are_unbiased() {
     let path = common::refs_dir().join("cornell.exr");
     let reference = reference::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let scene = Arc::new(scene::load("cornell").expect("built-in"));
     let (w, h) = (reference.width, reference.height);
+    const K: u32 = 3;
     let settings = RenderSettings::merged(&[
         &scene.render,
         &SettingsOverrides {
-            width: Some(2 * w),
-            height: Some(2 * h),
-            spp: Some(32),
+            width: Some(K * w),
+            height: Some(K * h),
+            spp: Some(16),
             sampler: Some(SamplerKind::Independent),
             adaptive: Some(false),
             ..Default::default()
         },
     ]);
     let mut r = Renderer::new(scene, settings).expect("settings");
+    // The premise: this size makes large passes (the note says so only then).
+    assert!(
+        r.caustics_note().contains("windows of 4096 ends"),
+        "{}",
+        r.caustics_note()
+    );
     r.render(&AtomicBool::new(false), |_| true);
     assert_eq!(r.stats().invalid, 0);
     let film = r.film();
     let fine = film.mean_rgb_f32();
-    // Each reference pixel: the mean of its 2x2 pixels here, and that mean's variance.
+    // Each reference pixel: the mean of its K x K pixels here, and that mean's variance.
     let n = 3 * (w * h) as usize;
     let (mut img, mut var) = (vec![0.0f64; n], vec![0.0f64; n]);
-    for y in 0..2 * h {
-        for x in 0..2 * w {
-            let i = (y * 2 * w + x) as usize;
-            let j = ((y / 2) * w + x / 2) as usize;
+    let kk = (K * K) as f64;
+    for y in 0..K * h {
+        for x in 0..K * w {
+            let i = (y * K * w + x) as usize;
+            let j = ((y / K) * w + x / K) as usize;
             let v = film.half_buffer_variance(i);
             for c in 0..3 {
-                img[3 * j + c] += fine[3 * i + c] as f64 / 4.0;
-                var[3 * j + c] += v[c] / 16.0;
+                img[3 * j + c] += fine[3 * i + c] as f64 / kk;
+                var[3 * j + c] += v[c] / (kk * kk);
             }
         }
     }

@@ -45,10 +45,14 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// Light paths per pixel and pass. Measured on `cornell` and `cornell-small-light` at 128 spp
-/// (README): from 1 down to 0.1 the film's estimated error did not move (0.0448-0.0449 and
-/// 0.1913) while the time fell 9.2 -> 6.7 s and 7.7 -> 6.2 s; at 0.03 the caustics start to
-/// show (0.0451).
-pub const LIGHT_PATHS_PER_PIXEL: f64 = 0.1;
+/// (README), before the joins: from 1 down to 0.1 the film's estimated error did not move
+/// (0.0448-0.0449 and 0.1913) while the time fell 9.2 -> 6.7 s and 7.7 -> 6.2 s; at 0.03 the
+/// caustics started to show (0.0451). With the joins, by time (64 spp, CPU seconds, RMSE against
+/// the reference over seeds 1-3): 0.2 / 0.05 / 0.035 / 0.025 against 0.1 take 1.107 / 0.927 /
+/// 0.893 / 0.870x the time at 0.993 / 1.011 / 1.019 / 1.032x the RMSE, MSE x time 1.09 / 0.95 /
+/// 0.93 / 0.93x; on cornell-small-light 0.05 takes 0.926x the time at the same estimated error.
+/// 0.05: most of the gain, the caustics' own noise still small beside the camera paths'.
+pub const LIGHT_PATHS_PER_PIXEL: f64 = 0.05;
 
 /// Paths per parallel task (and per random-stream block).
 const CHUNK: u64 = 2048;
@@ -183,8 +187,8 @@ impl CausticVertex {
 /// two: its first diffuse hit and the second one after a specular chain). A join picks one
 /// vertex of the pass with probability 1 / (vertices left) whether or not they were all kept
 /// (see [`CausticPass::pick_index`]), so the cap costs nothing in expectation; it bounds the pass's
-/// state: 0.1 light paths per pixel x (2 splats x 16 bytes + 0.66 x 56 bytes) = 6.9 bytes per
-/// pixel, 63.9 with the film (56) and the adaptive map (1). Measured on cornell (1.32 vertices
+/// state: 0.05 light paths per pixel x (2 splats x 16 bytes + 0.66 x 56 bytes) = 3.45 bytes per
+/// pixel, 60.45 with the film (56) and the adaptive map (1). Measured on cornell (1.32 vertices
 /// per light path before the cap) in the README.
 pub const VERTICES_PER_PATH: f64 = 0.66;
 
