@@ -89,8 +89,8 @@ const PILOT_CAMERA_PATHS: u64 = 4096;
 /// thresholds of 0.03, 0.15 and 0.6 x the mean, 6.71, 5.84 and 5.59 rays per path, RMSE 0.05186,
 /// 0.05188 and 0.05199 (the camera paths alone: 5.50 rays, 0.0637). Rays are not what the joins
 /// cost, though: the attempts are (picking an end, its bound), and a higher threshold ends more
-/// of them at the first bound. By time, cornell 64 spp, CPU seconds and RMSE (seeds 1-3) against
-/// 0.25: 0.5 and 1.0 save 5.6% and 8.1% of the time at +0.5% and +1.5% RMSE, 2 and 4 gain
+/// of them at the first bound. By time, cornell 64 spp, CPU seconds and RMSE (seeds 1-2) against
+/// 0.25: 0.5 and 1.0 save 4.6% and 7.5% of the time at +0.5% and +1.4% RMSE, 2 and 4 gain
 /// little more time for +3.3% and +7.1%: MSE x time 0.95x at 1.0, the best; on
 /// cornell-small-light 1.0 saves 3.7% at the same estimated error.
 const CONNECT_ROULETTE_SHARE: f64 = 1.0;
