@@ -136,8 +136,8 @@ fn adaptive_sampling_is_unbiased_and_estimates_its_error() {
 }
 
 /// Joins on an image large enough for large passes (`CausticTracer::large_passes`: each row
-/// picks its light-path ends a ray ahead, from its own window of them; 960x720 leaves ~45k ends
-/// a pass in 17 chunks, the window is 4k): the render, box-filtered 3x3 down to the reference's
+/// picks its light-path ends a ray ahead, from its own window of them; 1280x960 leaves ~57k ends
+/// a pass in 21 chunks, the window is 4k): the render, box-filtered 4x4 down to the reference's
 /// pixels, matches it in the regions the joins light most (the floor's caustic seen through the
 /// glass ball, the ceiling by the lamp) and over the whole image, within 4 standard errors.
 /// (Where a window wraps round past the pass's last end, picks that found nothing put the whole
@@ -149,7 +149,7 @@ fn joins_on_large_passes_are_unbiased() {
     let reference = reference::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let scene = Arc::new(scene::load("cornell").expect("built-in"));
     let (w, h) = (reference.width, reference.height);
-    const K: u32 = 3;
+    const K: u32 = 4;
     let settings = RenderSettings::merged(&[
         &scene.render,
         &SettingsOverrides {

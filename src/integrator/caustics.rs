@@ -51,8 +51,11 @@ use std::f64::consts::PI;
 /// the reference over seeds 1-3): 0.2 / 0.05 / 0.035 / 0.025 against 0.1 take 1.107 / 0.927 /
 /// 0.893 / 0.870x the time at 0.993 / 1.011 / 1.019 / 1.032x the RMSE, MSE x time 1.09 / 0.95 /
 /// 0.93 / 0.93x; on cornell-small-light 0.05 takes 0.926x the time at the same estimated error.
-/// 0.05: most of the gain, the caustics' own noise still small beside the camera paths'.
-pub const LIGHT_PATHS_PER_PIXEL: f64 = 0.05;
+/// 0.035 against 0.05, measured again a session later (CPU seconds, RMSE over seeds 1-6, the
+/// configurations alternated): cornell 64 spp 0.957x the time at 1.028x the MSE (MSE x time
+/// 0.984x), cornell-small-light 128 spp 0.971x the time at the same estimated error (0.972x):
+/// the optimum is flat from 0.025 to 0.05, and 0.035 sits in it with less time per path.
+pub const LIGHT_PATHS_PER_PIXEL: f64 = 0.035;
 
 /// Paths per parallel task (and per random-stream block).
 const CHUNK: u64 = 2048;
@@ -187,8 +190,8 @@ impl CausticVertex {
 /// two: its first diffuse hit and the second one after a specular chain). A join picks one
 /// vertex of the pass with probability 1 / (vertices left) whether or not they were all kept
 /// (see [`CausticPass::pick_index`]), so the cap costs nothing in expectation; it bounds the pass's
-/// state: 0.05 light paths per pixel x (2 splats x 16 bytes + 0.66 x 56 bytes) = 3.45 bytes per
-/// pixel, 60.45 with the film (56) and the adaptive map (1). Measured on cornell (1.32 vertices
+/// state: 0.035 light paths per pixel x (2 splats x 16 bytes + 0.66 x 56 bytes) = 2.41 bytes per
+/// pixel, 59.41 with the film (56) and the adaptive map (1). Measured on cornell (1.32 vertices
 /// per light path before the cap) in the README.
 pub const VERTICES_PER_PATH: f64 = 0.66;
 
