@@ -96,6 +96,11 @@ pub struct Renderer {
     caustics_note: String,
     /// Samples per pixel and pass once the pilot is over (`settings.adaptive`).
     map: Option<SampleMap>,
+    /// The light paths of the next pass (its number, its splats and ends), traced while this
+    /// pass's rows were: a pass's light paths depend only on the seed and the pass, so tracing
+    /// them a pass early changes no bit of the image, and the tracer's few long chunks no longer
+    /// leave a core idle before the rows start.
+    ahead: Option<(u32, PassSplats)>,
 }
 
 /// A rayon pool with `threads` workers (0 = one per core).
@@ -138,6 +143,7 @@ impl Renderer {
             stats: RenderStats::default(),
             error: None,
             map: None,
+            ahead: None,
         })
     }
 
@@ -243,16 +249,24 @@ impl Renderer {
         // path 1.3% and naive 0.4% against the 1-row bands of height / 64 per thread (2 threads,
         // medians of 5 alternating runs; 1 -> 2 threads went 1.89x -> 1.90x for naive).
         let band_rows = (settings.height / (threads * 64)).clamp(1, 8);
-        let invalid = AtomicU64::new(0);
-        let samples = AtomicU64::new(0);
-        let rays = AtomicU64::new(0);
-        let rows_done = AtomicU64::new(0);
-        let splats = match self.caustics.as_ref() {
-            Some(t) if !cancel.load(Ordering::Relaxed) => self
+        let counters = PassCounters::default();
+        let tracer = self.caustics.as_ref();
+        let splats = match (tracer, self.ahead.take()) {
+            (Some(_), Some((p, traced))) if p == pass => traced,
+            (Some(t), _) if !cancel.load(Ordering::Relaxed) => self
                 .pool
                 .install(|| t.trace_pass(scene, settings.seed, pass)),
             _ => PassSplats::default(),
         };
+        // The next pass's light paths are traced beside this pass's rows (each core takes
+        // rows when its light-path chunk is done), unless the render stops after this pass by
+        // its sample count. Two passes' splats and ends are then alive at once, so only where
+        // they are small (`large_passes`: at most 1 MiB of ends); large passes have enough
+        // chunks to share between the cores evenly anyway.
+        let trace_next = tracer.filter(|t| {
+            !t.large_passes() && pass + 1 < settings.spp && !cancel.load(Ordering::Relaxed)
+        });
+        let mut next: Option<PassSplats> = None;
         self.stats.rays += splats.rays;
         self.stats.light_rays += splats.rays;
         self.stats.light_paths += splats.paths;
@@ -267,55 +281,18 @@ impl Renderer {
         };
         let film = &mut self.film;
         self.pool.install(|| {
-            film.par_bands(band_rows).for_each(|mut band| {
-                let (mut bad, mut done, mut traced, mut rows) = (0u64, 0u64, 0u64, 0u64);
-                let first = band.first_row * settings.width;
-                let mut band_splats = splats
-                    .range(first, first + band.rows() * settings.width)
-                    .iter()
-                    .peekable();
-                ROW_BUFFERS.with_borrow_mut(|(scratch, values)| {
-                    for row in 0..band.rows() {
-                        if cancel.load(Ordering::Relaxed) {
-                            break;
-                        }
-                        let y = band.first_row + row;
-                        sample_row(&pass_rows, y, scratch, values);
-                        // Each of a pixel's samples of this pass gets the pass's splats: each sum
-                        // is an unbiased estimate (they share the splats' noise, which is why the
-                        // error is then read from the half-buffers, split by pass).
-                        let mut splat = (u32::MAX, DVec3::ZERO);
-                        for (&(x, _), &(v, r)) in scratch.plan.iter().zip(values.iter()) {
-                            let pixel = y * settings.width + x;
-                            if splat.0 != pixel {
-                                splat = (pixel, DVec3::ZERO);
-                                while let Some(s) = band_splats.next_if(|s| s.0 == pixel) {
-                                    splat.1 += glam::Vec3::from_array(s.1).as_dvec3();
-                                }
-                            }
-                            let v = v + splat.1;
-                            done += 1;
-                            traced += r as u64;
-                            if v.is_finite() {
-                                band.add(x, row, pass, v);
-                            } else {
-                                bad += 1;
-                            }
-                        }
-                        rows += 1;
-                    }
-                });
-                rows_done.fetch_add(rows, Ordering::Relaxed);
-                invalid.fetch_add(bad, Ordering::Relaxed);
-                samples.fetch_add(done, Ordering::Relaxed);
-                rays.fetch_add(traced, Ordering::Relaxed);
-            })
+            rayon::join(
+                || next = trace_next.map(|t| t.trace_pass(scene, settings.seed, pass + 1)),
+                || trace_rows(film, band_rows, &pass_rows, splats, cancel, &counters),
+            )
         });
-        let done = samples.into_inner();
-        self.stats.samples += done;
-        self.stats.invalid += invalid.into_inner();
-        self.stats.rays += rays.into_inner();
-        let outcome = if rows_done.into_inner() == settings.height as u64 {
+        if let Some(traced) = next {
+            self.ahead = Some((pass + 1, traced));
+        }
+        self.stats.samples += counters.samples.into_inner();
+        self.stats.invalid += counters.invalid.into_inner();
+        self.stats.rays += counters.rays.into_inner();
+        let outcome = if counters.rows.into_inner() == settings.height as u64 {
             self.stats.complete_passes += 1;
             if settings.target_error.is_some() {
                 // On the render pool, and counted in the render time: the check is part of it.
@@ -445,6 +422,71 @@ pub struct RowScratch {
     pub plan: Vec<(u32, u64)>,
 }
 
+/// What the threads of one pass count, added to the render's stats at its end.
+#[derive(Default)]
+struct PassCounters {
+    invalid: AtomicU64,
+    samples: AtomicU64,
+    rays: AtomicU64,
+    /// Rows traced to the end (fewer than the height when cancelled).
+    rows: AtomicU64,
+}
+
+/// The rows of one pass on the current pool, in bands of `band_rows`: every pixel's samples
+/// (`sample_row`) plus the pass's splats at that pixel, into the film.
+fn trace_rows(
+    film: &mut Film,
+    band_rows: u32,
+    pass_rows: &PassRows,
+    splats: &PassSplats,
+    cancel: &AtomicBool,
+    counters: &PassCounters,
+) {
+    film.par_bands(band_rows).for_each(|mut band| {
+        let (mut bad, mut done, mut traced, mut rows) = (0u64, 0u64, 0u64, 0u64);
+        let first = band.first_row * pass_rows.settings.width;
+        let mut band_splats = splats
+            .range(first, first + band.rows() * pass_rows.settings.width)
+            .iter()
+            .peekable();
+        ROW_BUFFERS.with_borrow_mut(|(scratch, values)| {
+            for row in 0..band.rows() {
+                if cancel.load(Ordering::Relaxed) {
+                    break;
+                }
+                let y = band.first_row + row;
+                sample_row(pass_rows, y, scratch, values);
+                // Each of a pixel's samples of this pass gets the pass's splats: each sum
+                // is an unbiased estimate (they share the splats' noise, which is why the
+                // error is then read from the half-buffers, split by pass).
+                let mut splat = (u32::MAX, DVec3::ZERO);
+                for (&(x, _), &(v, r)) in scratch.plan.iter().zip(values.iter()) {
+                    let pixel = y * pass_rows.settings.width + x;
+                    if splat.0 != pixel {
+                        splat = (pixel, DVec3::ZERO);
+                        while let Some(s) = band_splats.next_if(|s| s.0 == pixel) {
+                            splat.1 += glam::Vec3::from_array(s.1).as_dvec3();
+                        }
+                    }
+                    let v = v + splat.1;
+                    done += 1;
+                    traced += r as u64;
+                    if v.is_finite() {
+                        band.add(x, row, pass_rows.pass, v);
+                    } else {
+                        bad += 1;
+                    }
+                }
+                rows += 1;
+            }
+        });
+        counters.rows.fetch_add(rows, Ordering::Relaxed);
+        counters.invalid.fetch_add(bad, Ordering::Relaxed);
+        counters.samples.fetch_add(done, Ordering::Relaxed);
+        counters.rays.fetch_add(traced, Ordering::Relaxed);
+    })
+}
+
 /// What every row of one pass shares: the scene, the settings, the pass, its adaptive map (none
 /// before the pilot ends) and its light tracer's splats and ends.
 #[derive(Clone, Copy)]
@@ -565,6 +607,35 @@ mod tests {
         let map = SampleMap::build(&film, PILOT_PASSES);
         assert!(map.max() > 3.0 && map.weight(0, 0) == 1.0, "{map:?}");
         map
+    }
+
+    /// Tracing a pass's light paths beside the previous pass's rows changes no bit: the same
+    /// render with every pass's light paths traced at its own start (the next pass's dropped)
+    /// gives the same film, and the traced-ahead passes are the ones used.
+    #[test]
+    fn light_paths_traced_a_pass_ahead_give_the_same_image() {
+        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
+        let mut settings = RenderSettings::merged(&[&scene.render]);
+        (settings.width, settings.height, settings.spp) = (64, 48, 20);
+        let cancel = AtomicBool::new(false);
+        let mut ahead = Renderer::new(scene.clone(), settings.clone()).expect("settings");
+        let mut own = Renderer::new(scene, settings).expect("settings");
+        for pass in 0..20 {
+            assert_eq!(ahead.run_pass(&cancel), PassOutcome::Complete);
+            // Every pass but the last leaves the next one's light paths traced (the passes from
+            // 16 on are adaptive, which the light paths do not depend on).
+            let expect_ahead = pass + 1 < 20;
+            assert_eq!(
+                ahead.ahead.as_ref().map(|a| a.0),
+                expect_ahead.then_some(pass + 1)
+            );
+            own.ahead = None;
+            assert_eq!(own.run_pass(&cancel), PassOutcome::Complete);
+        }
+        assert_eq!(ahead.stats().light_paths, own.stats().light_paths);
+        assert_eq!(ahead.stats().rays, own.stats().rays);
+        let (a, b) = (ahead.film().mean_rgb_f32(), own.film().mean_rgb_f32());
+        assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
     }
 
     /// The summary says when a render's joins pick from windows (passes whose kept ends exceed

@@ -191,8 +191,9 @@ impl CausticVertex {
 /// vertex of the pass with probability 1 / (vertices left) whether or not they were all kept
 /// (see [`CausticPass::pick_index`]), so the cap costs nothing in expectation; it bounds the pass's
 /// state: 0.035 light paths per pixel x (2 splats x 16 bytes + 0.66 x 56 bytes) = 2.41 bytes per
-/// pixel, 59.41 with the film (56) and the adaptive map (1). Measured on cornell (1.32 vertices
-/// per light path before the cap) in the README.
+/// pixel, 59.41 with the film (56) and the adaptive map (1); 61.82 on images whose passes are not
+/// large, where the next pass is traced beside this one's rows (`Renderer::run_pass`). Measured
+/// on cornell (1.32 vertices per light path before the cap) in the README.
 pub const VERTICES_PER_PATH: f64 = 0.66;
 
 /// The caustic vertices one chunk of light paths left: how many (`seen`) and where its kept
