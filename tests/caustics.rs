@@ -200,9 +200,9 @@ fn joined_caustic_paths_match_and_cut_the_noise() {
     // light-direct, 0.83x the camera paths' (0.894x and 0.82x at 0.05 light paths per pixel
     // instead of 0.035; 0.866x and 0.81x with the joins' roulette at 0.25 x the mean luminance
     // instead of 1 and 0.1 light paths per pixel: cheaper joins and passes, a little more noise
-    // each); the large
-    // light that keeps the camera paths' estimate testable also lets them find these caustics
-    // fairly often, so the cut is modest here (cornell: MSE -34% at 64 spp, README).
+    // each); the large light that keeps the camera paths' estimate testable also lets them find
+    // these caustics fairly often, so the cut is modest here (cornell: MSE -34% at 64 spp,
+    // README).
     let wall = (w_blocks(&a), w_blocks(&b), w_blocks(&c));
     eprintln!(
         "wall: variance of the block means: light {:.3e}, light-direct {:.3e}, path {:.3e}",
