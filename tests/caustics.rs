@@ -196,8 +196,9 @@ fn joined_caustic_paths_match_and_cut_the_noise() {
             }
         }
     }
-    // The top row of blocks is the wall. Measured: variance of its block means 0.896x that of
-    // light-direct, 0.83x the camera paths' (0.894x and 0.82x at 0.05 light paths per pixel
+    // The top row of blocks is the wall. Measured: variance of its block means 0.898x that of
+    // light-direct, 0.83x the camera paths' (0.896x and 0.83x with every camera vertex
+    // attempting its join instead of a fifth of them; 0.894x and 0.82x at 0.05 light paths per pixel
     // instead of 0.035; 0.866x and 0.81x with the joins' roulette at 0.25 x the mean luminance
     // instead of 1 and 0.1 light paths per pixel: cheaper joins and passes, a little more noise
     // each); the large light that keeps the camera paths' estimate testable also lets them find

@@ -343,7 +343,7 @@ impl PathState {
             join
         } else {
             let u = sampler.get_1d_hashed_if(here);
-            here.then(|| c.pick_index(u)).flatten()
+            here.then(|| c.attempt(u)).flatten()
         };
         match (join, here) {
             (Some(join), true) => {
@@ -412,7 +412,7 @@ fn joinable(caustics: Option<CausticPass>) -> Option<CausticPass> {
 #[inline(always)]
 fn pick_ahead(caustics: Option<CausticPass>, sampler: &mut Sampler) -> Option<(u32, f64)> {
     let c = joinable(caustics).filter(|c| c.tracer.large_passes())?;
-    let (k, rest) = c.pick_index(sampler.get_1d_hashed())?;
+    let (k, rest) = c.attempt(sampler.get_1d_hashed())?;
     c.prefetch(k);
     Some((k, rest))
 }
@@ -547,7 +547,8 @@ fn connect_caustic(
     let bound = max_component(beta * material.f_cos_bound() * my.f_cos_bound() * v.alpha())
         * (share / d2)
         * (1.0 + 1e-9);
-    let roll = u_rr * c.tracer.connect_threshold;
+    let threshold = c.tracer.connect_threshold * c.tracer.attempt;
+    let roll = u_rr * threshold;
     if roll >= bound {
         return None;
     }
@@ -595,11 +596,11 @@ fn connect_caustic(
     // Roulette on the shadow ray: a connection worth little to the pixel is traced with
     // probability in proportion to its worth and divided by it (still unbiased).
     let worth = max_component(beta * value);
-    let q = (worth / c.tracer.connect_threshold).min(1.0);
+    let q = (worth / threshold).min(1.0);
     if q.is_nan() || q <= 0.0 || u_rr >= q {
         return None;
     }
-    value /= q;
+    value /= q * c.tracer.attempt;
     let o = spawn_origin(hit.p, hit.n, hit.err, dir);
     let end = spawn_origin(v.p, n_y, v.err as f64, -dir);
     let seg = end - o;
