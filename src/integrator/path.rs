@@ -756,8 +756,7 @@ mod stream_tests {
     fn a_stream_entry_stays_small() {
         let size = std::mem::size_of::<(PathState, Sampler, Shadows, bool)>();
         println!("stream entry: {size} bytes");
-        // 544 since the Sobol sampler keeps a block of eight dimensions' numbers (96 bytes).
-        assert!(size <= 544, "{size} bytes");
+        assert!(size <= 448, "{size} bytes");
     }
 }
 

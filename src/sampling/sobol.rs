@@ -11,9 +11,7 @@
 use super::rng::mix64;
 
 /// Generator matrix of Sobol dimension 1 (polynomial x + 1), as direction numbers per index
-/// bit: v_0 = 2^31, v_k = v_{k-1} ^ (v_{k-1} >> 1). The sampler applies it by its structure
-/// ([`rev_sobol_dim1`]); the tests hold that to the matrix.
-#[cfg(test)]
+/// bit: v_0 = 2^31, v_k = v_{k-1} ^ (v_{k-1} >> 1).
 const SOBOL_DIM1: [u32; 32] = {
     let mut v = [0u32; 32];
     v[0] = 1 << 31;
@@ -32,12 +30,9 @@ const SOBOL_DIM1: [u32; 32] = {
 const SOBOL_DIM1_BYTES: [[u32; 256]; 4] = byte_tables(false);
 
 /// The same with each direction number bit-reversed: yields reverse_bits(sobol_dim1(i)) directly,
-/// the form the Owen scramble works on (how the sampler applied the matrix before
-/// [`rev_sobol_dim1`]).
-#[cfg(test)]
+/// the form the Owen scramble works on.
 const SOBOL_DIM1_REV_BYTES: [[u32; 256]; 4] = byte_tables(true);
 
-#[cfg(test)]
 const fn byte_tables(reversed: bool) -> [[u32; 256]; 4] {
     let mut t = [[0u32; 256]; 4];
     let mut b = 0;
@@ -67,7 +62,7 @@ fn sobol_dim1(index: u32) -> u32 {
     apply(&SOBOL_DIM1_BYTES, index)
 }
 
-#[cfg(test)]
+#[inline]
 fn apply(tables: &[[u32; 256]; 4], index: u32) -> u32 {
     let [b0, b1, b2, b3] = index.to_le_bytes();
     tables[0][b0 as usize]
@@ -100,103 +95,6 @@ pub struct PaddedSobol {
     pixel_seed: u64,
     /// The sample index, bit-reversed once here instead of in every dimension's shuffle.
     rev_index: u32,
-    /// The numbers of the last block of dimensions drawn from.
-    block: Block,
-}
-
-/// Dimensions whose numbers are computed together: a path's vertex reads about seven in a row.
-const BLOCK: u32 = 8;
-
-/// The numbers of [`BLOCK`] consecutive dimensions, both [`PaddedSobol::get_2d`]'s and
-/// [`PaddedSobol::get_1d`]'s, as 32-bit fractions. One dimension's draw is a chain of hashes,
-/// multiplies and bit reversals on 32- and 64-bit words (an eighth of a cornell render's
-/// instructions); eight dimensions side by side are the same operations on vectors, which the
-/// x86-64-v3 copy below runs eight or four at a time.
-#[derive(Clone, Debug, Default)]
-struct Block {
-    /// The block's first dimension over [`BLOCK`], plus one (0: none computed yet).
-    tag: u32,
-    x: [u32; BLOCK as usize],
-    y: [u32; BLOCK as usize],
-    one: [u32; BLOCK as usize],
-}
-
-impl Block {
-    /// The numbers of dimensions `BLOCK * b ..` for the pixel and sample of `pixel_seed` and
-    /// `rev_index`: per dimension, exactly the words [`PaddedSobol::get_2d`] and
-    /// [`PaddedSobol::get_1d`] compute alone.
-    #[inline(always)]
-    fn compute(pixel_seed: u64, rev_index: u32, b: u32) -> Block {
-        const N: usize = BLOCK as usize;
-        let mut h = [0u64; N];
-        for (k, h) in h.iter_mut().enumerate() {
-            let dim = b * BLOCK + k as u32;
-            *h = mix64(pixel_seed ^ (dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
-        }
-        let mut shuffled = [0u32; N];
-        for (s, h) in shuffled.iter_mut().zip(&h) {
-            *s = laine_karras(rev_index, *h as u32).reverse_bits();
-        }
-        let mut h2 = [0u64; N];
-        for (h2, h) in h2.iter_mut().zip(&h) {
-            *h2 = mix64(*h);
-        }
-        let mut out = Block {
-            tag: b + 1,
-            ..Block::default()
-        };
-        for k in 0..N {
-            let (lo, hi) = (h2[k] as u32, (h2[k] >> 32) as u32);
-            out.x[k] = laine_karras(shuffled[k], lo).reverse_bits();
-            out.y[k] = laine_karras(rev_sobol_dim1(shuffled[k]), hi).reverse_bits();
-            out.one[k] = laine_karras(shuffled[k], hi).reverse_bits();
-        }
-        out
-    }
-
-    /// [`Block::compute`] in a copy for x86-64-v3 where the processor has it.
-    #[inline(never)]
-    fn fill(&mut self, pixel_seed: u64, rev_index: u32, b: u32) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512dq") {
-            // SAFETY: the processor has AVX-512 F and DQ (checked above).
-            *self = unsafe { compute_v4(pixel_seed, rev_index, b) };
-            return;
-        }
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked above), all the copy is compiled for.
-            *self = unsafe { compute_v3(pixel_seed, rev_index, b) };
-            return;
-        }
-        *self = Block::compute(pixel_seed, rev_index, b);
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw")]
-unsafe fn compute_v4(pixel_seed: u64, rev_index: u32, b: u32) -> Block {
-    Block::compute(pixel_seed, rev_index, b)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn compute_v3(pixel_seed: u64, rev_index: u32, b: u32) -> Block {
-    Block::compute(pixel_seed, rev_index, b)
-}
-
-/// reverse_bits(sobol_dim1(i)) for bit-reversed i, by the matrix's structure rather than tables:
-/// bit j of the result is the parity of the set bits k of `rev` with C(k, j) odd, i.e. (Lucas)
-/// with j a subset of k as 5-bit numbers, a sum over supersets that five masked shifts form.
-/// Equal to `apply(&SOBOL_DIM1_REV_BYTES, _)` (tested); on vectors of words it needs no gathers.
-#[inline(always)]
-fn rev_sobol_dim1(mut x: u32) -> u32 {
-    x ^= (x >> 1) & 0x5555_5555;
-    x ^= (x >> 2) & 0x3333_3333;
-    x ^= (x >> 4) & 0x0f0f_0f0f;
-    x ^= (x >> 8) & 0x00ff_00ff;
-    x ^= (x >> 16) & 0x0000_ffff;
-    x
 }
 
 const TO_UNIT: f64 = 1.0 / 4_294_967_296.0;
@@ -213,58 +111,17 @@ impl PaddedSobol {
             // half their numbers: 32-spp cornell images differed by RMSE 0.012, not 0.059).
             pixel_seed: mix64(mix64(mix64(seed ^ 0x50b0_1c0d_e5ee_d000) ^ replicate) ^ pixel),
             rev_index: ((sample >> 1) as u32).reverse_bits(),
-            block: Block::default(),
         }
     }
 
-    #[cfg(test)]
+    #[inline]
     fn seeds(&self, dim: u32) -> u64 {
         mix64(self.pixel_seed ^ (dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15))
     }
 
-    /// Dimensions (2 dim, 2 dim + 1) of this sample, from the block of dimensions holding
-    /// `dim` (computed when a draw first leaves the last one).
+    /// Dimensions (2 dim, 2 dim + 1) of this sample.
     #[inline(always)]
-    pub fn get_2d(&mut self, dim: u32) -> (f64, f64) {
-        let k = self.block_index(dim);
-        (
-            self.block.x[k] as f64 * TO_UNIT,
-            self.block.y[k] as f64 * TO_UNIT,
-        )
-    }
-
-    /// A 1D sample: the van der Corput dimension of its own shuffled, scrambled pair.
-    #[inline(always)]
-    pub fn get_1d(&mut self, dim: u32) -> f64 {
-        let k = self.block_index(dim);
-        self.block.one[k] as f64 * TO_UNIT
-    }
-
-    /// Where `dim`'s numbers sit in the block, computing the block first if it is another.
-    #[inline(always)]
-    fn block_index(&mut self, dim: u32) -> usize {
-        let b = dim / BLOCK;
-        if self.block.tag != b.wrapping_add(1) {
-            self.block.fill(self.pixel_seed, self.rev_index, b);
-        }
-        (dim % BLOCK) as usize
-    }
-
-    /// Dimension `dim` as an independent uniform number, outside the sequence: one hash of
-    /// (pixel, replicate, sample, dim) instead of the scrambled point's three hashes and two bit
-    /// reversals (~15 instructions instead of ~100). For numbers stratification does nothing
-    /// for. The hash's input is one-to-one in (dim, sample): dim x an odd constant fixes the low
-    /// 32 bits, the reversed sample index only the high ones.
-    #[inline(always)]
-    pub fn get_1d_hashed(&self, dim: u32) -> f64 {
-        let key =
-            (dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ ((self.rev_index as u64) << 32);
-        (mix64(self.pixel_seed ^ key) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// [`PaddedSobol::get_2d`] for one dimension alone, as the blocks compute it per dimension.
-    #[cfg(test)]
-    fn get_2d_alone(&self, dim: u32) -> (f64, f64) {
+    pub fn get_2d(&self, dim: u32) -> (f64, f64) {
         let h = self.seeds(dim);
         // Nested uniform scramble of the index: owen_scramble(index), with the reversal hoisted.
         let shuffled = laine_karras(self.rev_index, h as u32).reverse_bits();
@@ -282,71 +139,30 @@ impl PaddedSobol {
         )
     }
 
-    /// [`PaddedSobol::get_1d`] for one dimension alone.
-    #[cfg(test)]
-    fn get_1d_alone(&self, dim: u32) -> f64 {
+    /// A 1D sample: the van der Corput dimension of its own shuffled, scrambled pair.
+    #[inline(always)]
+    pub fn get_1d(&self, dim: u32) -> f64 {
         let h = self.seeds(dim);
         let shuffled = laine_karras(self.rev_index, h as u32).reverse_bits();
         laine_karras(shuffled, (mix64(h) >> 32) as u32).reverse_bits() as f64 * TO_UNIT
+    }
+
+    /// Dimension `dim` as an independent uniform number, outside the sequence: one hash of
+    /// (pixel, replicate, sample, dim) instead of the scrambled point's three hashes and two bit
+    /// reversals (~15 instructions instead of ~100). For numbers stratification does nothing
+    /// for. The hash's input is one-to-one in (dim, sample): dim x an odd constant fixes the low
+    /// 32 bits, the reversed sample index only the high ones.
+    #[inline(always)]
+    pub fn get_1d_hashed(&self, dim: u32) -> f64 {
+        let key =
+            (dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ ((self.rev_index as u64) << 32);
+        (mix64(self.pixel_seed ^ key) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_matrix_by_its_structure_equals_the_tables() {
-        let mut rng = crate::sampling::Rng::new(9);
-        let words = (0..4096u32).chain([u32::MAX, 1 << 31, 0x8000_0001]);
-        for x in words.chain((0..100_000).map(|_| rng.next_u64() as u32)) {
-            assert_eq!(rev_sobol_dim1(x), apply(&SOBOL_DIM1_REV_BYTES, x), "{x:#x}");
-        }
-    }
-
-    /// Every copy of the block computation (portable, and those the processor runs) gives each
-    /// dimension's numbers exactly as the per-dimension formulation does, and the sampler's
-    /// draws read them back in any order: forwards across block boundaries, backwards, and
-    /// alternating between blocks.
-    #[test]
-    fn blocks_give_each_dimension_its_own_numbers() {
-        let mut rng = crate::sampling::Rng::new(10);
-        for trial in 0..300u64 {
-            let (seed, pixel, sample) = (rng.next_u64(), rng.next_u64() % 1_000_000, trial);
-            let p = PaddedSobol::new(seed, pixel, sample);
-            let b = (rng.next_u64() % 40) as u32;
-            let mut copies = vec![Block::compute(p.pixel_seed, p.rev_index, b)];
-            #[cfg(target_arch = "x86_64")]
-            {
-                if std::arch::is_x86_feature_detected!("avx2") {
-                    copies.push(unsafe { compute_v3(p.pixel_seed, p.rev_index, b) });
-                }
-                if std::arch::is_x86_feature_detected!("avx512dq") {
-                    copies.push(unsafe { compute_v4(p.pixel_seed, p.rev_index, b) });
-                }
-            }
-            for block in &copies {
-                assert_eq!(block.tag, b + 1);
-                for k in 0..BLOCK {
-                    let dim = b * BLOCK + k;
-                    let (x, y) = p.get_2d_alone(dim);
-                    let k = k as usize;
-                    assert_eq!(block.x[k] as f64 * TO_UNIT, x);
-                    assert_eq!(block.y[k] as f64 * TO_UNIT, y);
-                    assert_eq!(block.one[k] as f64 * TO_UNIT, p.get_1d_alone(dim));
-                }
-            }
-            let mut q = p.clone();
-            let dims: Vec<u32> = (1..30)
-                .chain((1..30).rev())
-                .chain([3, 17, 4, 16, 40, 2])
-                .collect();
-            for dim in dims {
-                assert_eq!(q.get_2d(dim), p.get_2d_alone(dim), "dim {dim}");
-                assert_eq!(q.get_1d(dim), p.get_1d_alone(dim), "dim {dim}");
-            }
-        }
-    }
 
     #[test]
     fn byte_tables_match_the_bit_loop() {
@@ -394,10 +210,7 @@ mod tests {
                 let h2 = mix64(h);
                 let x = owen_scramble(shuffled.reverse_bits(), h2 as u32);
                 let y = owen_scramble(sobol_dim1(shuffled), (h2 >> 32) as u32);
-                assert_eq!(
-                    p.get_2d_alone(dim),
-                    (x as f64 * TO_UNIT, y as f64 * TO_UNIT)
-                );
+                assert_eq!(p.get_2d(dim), (x as f64 * TO_UNIT, y as f64 * TO_UNIT));
             }
         }
     }
