@@ -25,7 +25,8 @@
 //! the floor's caustic through the glass ball again, seen after a bounce, 97% of its squared
 //! error as fireflies of 900 before these joins). A pass keeps at most
 //! [`VERTICES_PER_PATH`] ends per light path, a uniform sample per chunk, and a join picks among
-//! all the ends left, kept or not, with equal probability.
+//! all the ends left, kept or not, with equal probability. A camera vertex attempts its join
+//! with probability [`JOIN_ATTEMPT`] and plays a roulette on the join's worth (both divided out).
 //!
 //! Each pass traces [`LIGHT_PATHS_PER_PIXEL`] x pixels light paths with their own random streams
 //! and adds the splats landing in a pixel to that pixel's camera sample of the same pass: every
@@ -1175,6 +1176,40 @@ mod tests {
             (pass.seen, pass.vertices[k as usize].material, rest)
         });
         assert_uniform(seen, &counts, 2);
+    }
+
+    /// A camera vertex attempts its join with probability `attempt`, and an attempt that goes
+    /// ahead still picks every vertex left with probability 1 / seen and leaves a uniform number
+    /// for the roulette: chi-square over (vertex, half of that number), and the draws it took
+    /// to see the trials' attempts against their negative binomial law, 5 sigma each.
+    #[test]
+    fn attempts_go_ahead_at_their_rate_and_pick_uniformly() {
+        let tracer = CausticTracer {
+            attempt: JOIN_ATTEMPT,
+            ..dummy_tracer()
+        };
+        let p = JOIN_ATTEMPT;
+        assert!(p > 0.0 && p < 1.0);
+        let mut rng = Rng::new(13);
+        let trials = 200_000u64;
+        let mut draws = 0u64;
+        let (seen, counts) = pick_counts(trials, |t| {
+            let all = reservoir_pass(t);
+            let pass = all.pass(&tracer);
+            loop {
+                draws += 1;
+                if let Some((k, rest)) = pass.attempt(rng.next_f64()) {
+                    break (pass.seen, pass.vertices[k as usize].material, rest);
+                }
+            }
+        });
+        assert_uniform(seen, &counts, 2);
+        let n = trials as f64;
+        let z = (draws as f64 - n / p) / ((n * (1.0 - p)).sqrt() / p);
+        assert!(
+            z.abs() < 5.0,
+            "{draws} draws for {trials} attempts (z {z:.2})"
+        );
     }
 
     /// 24 vertices left by 5 chunks whose reservoirs keep all, some or none of them (drawn
