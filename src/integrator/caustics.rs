@@ -403,11 +403,11 @@ impl CausticPass<'_> {
         Some((g.start + k, (f - k as f64).clamp(0.0, 1.0)))
     }
 
-    /// A camera vertex's join for uniform `u`: none with probability 1 - `attempt`, else
+    /// A camera vertex's join for uniform `u`: none with probability 1 - [`JOIN_ATTEMPT`], else
     /// [`CausticPass::pick_index`] of `u` stretched back to uniform.
     #[inline]
     pub fn attempt(&self, u: f64) -> Option<(u32, f64)> {
-        let p = self.tracer.attempt;
+        let p = JOIN_ATTEMPT;
         if u >= p {
             return None;
         }
@@ -471,8 +471,6 @@ pub struct CausticTracer {
     pub connect: bool,
     /// Connections worth less than this (radiance) play roulette for their shadow ray.
     pub connect_threshold: f64,
-    /// The chance a camera vertex attempts its join at all (see [`JOIN_ATTEMPT`]).
-    pub attempt: f64,
 }
 
 impl CausticTracer {
@@ -555,7 +553,6 @@ impl CausticTracer {
             pilot_rate: 0.0,
             connect: settings.caustics == Caustics::Light,
             connect_threshold: 0.0,
-            attempt: JOIN_ATTEMPT,
         };
         // A fixed-seed pilot, before any sample is taken: the choice does not depend on the
         // render's random numbers, so either way the estimate stays unbiased.
@@ -601,7 +598,7 @@ impl CausticTracer {
             format!(
                 "their ends joined to camera vertices by MIS, each join traced with \
                  probability min({}, worth / {:.3}){windows}",
-                self.attempt, self.connect_threshold
+                JOIN_ATTEMPT, self.connect_threshold
             )
         } else {
             "seen directly only (caustics = \"light-direct\")".to_string()
@@ -1184,10 +1181,7 @@ mod tests {
     /// to see the trials' attempts against their negative binomial law, 5 sigma each.
     #[test]
     fn attempts_go_ahead_at_their_rate_and_pick_uniformly() {
-        let tracer = CausticTracer {
-            attempt: JOIN_ATTEMPT,
-            ..dummy_tracer()
-        };
+        let tracer = dummy_tracer();
         let p = JOIN_ATTEMPT;
         assert!(p > 0.0 && p < 1.0);
         let mut rng = Rng::new(13);
@@ -1321,7 +1315,6 @@ mod tests {
             pilot_rate: 0.0,
             connect: true,
             connect_threshold: 0.0,
-            attempt: 1.0,
         }
     }
 }

@@ -7,7 +7,7 @@
 //! w_bsdf. After a delta bounce (mirror, glass) light sampling could not have found the path, so
 //! the emission counts in full.
 
-use super::caustics::{connection_ratio, CausticPass};
+use super::caustics::{connection_ratio, CausticPass, JOIN_ATTEMPT};
 use super::{next_ray, sample_bsdf};
 use crate::accel::lanes::RayBatch;
 use crate::geometry::{spawn_origin, Hit};
@@ -547,7 +547,7 @@ fn connect_caustic(
     let bound = max_component(beta * material.f_cos_bound() * my.f_cos_bound() * v.alpha())
         * (share / d2)
         * (1.0 + 1e-9);
-    let threshold = c.tracer.connect_threshold * c.tracer.attempt;
+    let threshold = c.tracer.connect_threshold * JOIN_ATTEMPT;
     let roll = u_rr * threshold;
     if roll >= bound {
         return None;
@@ -600,7 +600,7 @@ fn connect_caustic(
     if q.is_nan() || q <= 0.0 || u_rr >= q {
         return None;
     }
-    value /= q * c.tracer.attempt;
+    value /= q * JOIN_ATTEMPT;
     let o = spawn_origin(hit.p, hit.n, hit.err, dir);
     let end = spawn_origin(v.p, n_y, v.err as f64, -dir);
     let seg = end - o;
