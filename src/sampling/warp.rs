@@ -95,6 +95,7 @@ pub const UNIFORM_SPHERE_PDF: f64 = 0.25 * FRAC_1_PI;
 /// `one_minus_cos_max` = 1 - cos(theta_max). Passing 1 - cos rather than cos keeps tiny cones
 /// (a light of radius 1e-4 seen from 60 units subtends 1 - cos ~ 1e-12) exact: cos itself would
 /// round to 1 and the cone would collapse. pdf = 1 / (2 pi (1 - cos_max)).
+#[inline(always)]
 pub fn uniform_cone(u: (f64, f64), one_minus_cos_max: f64) -> DVec3 {
     // 1 - cos(theta) = u * (1 - cos_max); sin^2 = (1 - cos)(1 + cos) avoids cancellation.
     let one_minus_cos = u.0 * one_minus_cos_max;
