@@ -303,15 +303,28 @@ impl SphereLanes {
             best.copy_from_slice(t_out);
             let mut best_prim = [u64::MAX; LANES];
             for s in &self.flat {
+                let mut fx = [0.0; LANES];
+                let mut fy = [0.0; LANES];
+                let mut fz = [0.0; LANES];
+                let mut b = [0.0; LANES];
+                let mut disc = [0.0; LANES];
                 for k in 0..LANES {
-                    let fx = ox[k] - s.cx;
-                    let fy = oy[k] - s.cy;
-                    let fz = oz[k] - s.cz;
-                    let b = fx * dx[k] + fy * dy[k] + fz * dz[k];
-                    let lx = fx - dx[k] * b;
-                    let ly = fy - dy[k] * b;
-                    let lz = fz - dz[k] * b;
-                    let disc = s.r2 - (lx * lx + ly * ly + lz * lz);
+                    fx[k] = ox[k] - s.cx;
+                    fy[k] = oy[k] - s.cy;
+                    fz[k] = oz[k] - s.cz;
+                    b[k] = fx[k] * dx[k] + fy[k] * dy[k] + fz[k] * dz[k];
+                    let lx = fx[k] - dx[k] * b[k];
+                    let ly = fy[k] - dy[k] * b[k];
+                    let lz = fz[k] - dz[k] * b[k];
+                    disc[k] = s.r2 - (lx * lx + ly * ly + lz * lz);
+                }
+                // Most of the eight rays miss a small sphere: when all do, the square root and
+                // the division (the costly part of a vector pass) change nothing.
+                if !disc.iter().any(|d| *d >= 0.0) {
+                    continue;
+                }
+                for k in 0..LANES {
+                    let (fx, fy, fz, b, disc) = (fx[k], fy[k], fz[k], b[k], disc[k]);
                     let c = (fx * fx + fy * fy + fz * fz) - s.r2;
                     let q = -b - disc.max(0.0).sqrt().copysign(b);
                     let t0 = c / q;
