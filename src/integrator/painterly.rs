@@ -125,6 +125,10 @@ pub fn radiance(
         painted |= paint_here;
         depth += 1;
         let u_rr = sampler.get_1d();
+        // Deeper vertices hash their numbers, as `path`'s do.
+        if depth == path::SEQUENCE_DEPTH {
+            sampler.leave_sequence();
+        }
         if painted {
             // Nothing more can be gathered with zero throughput, and no roulette will end it.
             if !beta.cmpgt(DVec3::ZERO).any() {

@@ -39,6 +39,10 @@ impl SamplerKind {
     }
 }
 
+/// Sobol dimensions from this bit up are drawn hashed (see [`Sampler::leave_sequence`]); their
+/// low bits go on counting, so each still gets its own number.
+const HASHED: u32 = 1 << 31;
+
 enum Source {
     Independent(Rng),
     Sobol(PaddedSobol),
@@ -67,6 +71,21 @@ impl Sampler {
             dim: 0,
             rays: 0,
         }
+    }
+
+    /// From here on, draw every number hashed independently ([`Sampler::get_1d_hashed`]) instead
+    /// of from the Sobol sequence: for a path's deep vertices, where the sequence's
+    /// stratification buys less than its cost (each 2D point takes three scrambling hashes and
+    /// two bit reversals, a hashed pair one `mix64`). The independent sampler is unchanged.
+    #[inline(always)]
+    pub fn leave_sequence(&mut self) {
+        self.dim |= HASHED;
+    }
+
+    /// Whether numbers still come from the sequence (always true of the independent sampler).
+    #[cfg(test)]
+    pub fn in_sequence(&self) -> bool {
+        self.dim < HASHED
     }
 
     /// Record one closest-hit query; integrators call it next to every `Scene::intersect`.
@@ -116,7 +135,7 @@ impl Sampler {
             Source::Independent(rng) => rng.next_f64(),
             Source::Sobol(s) => {
                 self.dim += 1;
-                match (used, hashed) {
+                match (used, hashed || self.dim >= HASHED) {
                     (false, _) => 0.5,
                     (true, false) => s.get_1d(self.dim),
                     (true, true) => s.get_1d_hashed(self.dim),
@@ -143,8 +162,44 @@ impl Sampler {
             Source::Independent(rng) => (rng.next_f64(), rng.next_f64()),
             Source::Sobol(s) => {
                 self.dim += 1;
-                s.get_2d(self.dim)
+                if self.dim >= HASHED {
+                    s.get_2d_hashed(self.dim)
+                } else {
+                    s.get_2d(self.dim)
+                }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Before `leave_sequence` a Sobol sampler draws the scrambled sequence's points, after it
+    /// hashed numbers with dimensions of their own; the independent sampler draws on unchanged.
+    #[test]
+    fn leaving_the_sequence_switches_to_hashed_numbers() {
+        let (seed, pixel, sample) = (5, 1234, 9);
+        let sobol = PaddedSobol::new(seed, pixel, sample);
+        let mut s = Sampler::new(SamplerKind::Sobol, seed, pixel, sample);
+        assert_eq!(s.get_2d(), sobol.get_2d(1));
+        assert_eq!(s.get_1d(), sobol.get_1d(2));
+        s.leave_sequence();
+        assert_eq!(s.get_2d(), sobol.get_2d_hashed(HASHED | 3));
+        assert_eq!(s.get_1d(), sobol.get_1d_hashed(HASHED | 4));
+        assert_ne!(s.get_2d(), sobol.get_2d(5));
+        // Passed-over dimensions still count, and leaving twice changes nothing.
+        s.get_1d_if(false);
+        s.leave_sequence();
+        assert_eq!(s.get_1d(), sobol.get_1d_hashed(HASHED | 7));
+
+        let mut a = Sampler::new(SamplerKind::Independent, seed, pixel, sample);
+        let mut b = Sampler::new(SamplerKind::Independent, seed, pixel, sample);
+        a.get_2d();
+        b.get_2d();
+        b.leave_sequence();
+        assert_eq!(a.get_2d(), b.get_2d());
+        assert_eq!(a.get_1d(), b.get_1d());
     }
 }

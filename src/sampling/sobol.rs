@@ -147,6 +147,20 @@ impl PaddedSobol {
         laine_karras(shuffled, (mix64(h) >> 32) as u32).reverse_bits() as f64 * TO_UNIT
     }
 
+    /// Dimensions (2 dim, 2 dim + 1) as two independent uniform numbers, outside the sequence:
+    /// the two halves of one hash of (pixel, replicate, sample, dim), 32 bits each like the
+    /// sequence's. The same key as [`PaddedSobol::get_1d_hashed`]: a dimension is drawn once.
+    #[inline(always)]
+    pub fn get_2d_hashed(&self, dim: u32) -> (f64, f64) {
+        let m = mix64(self.pixel_seed ^ self.hash_key(dim));
+        ((m >> 32) as f64 * TO_UNIT, (m as u32) as f64 * TO_UNIT)
+    }
+
+    #[inline(always)]
+    fn hash_key(&self, dim: u32) -> u64 {
+        (dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ ((self.rev_index as u64) << 32)
+    }
+
     /// Dimension `dim` as an independent uniform number, outside the sequence: one hash of
     /// (pixel, replicate, sample, dim) instead of the scrambled point's three hashes and two bit
     /// reversals (~15 instructions instead of ~100). For numbers stratification does nothing
@@ -154,9 +168,7 @@ impl PaddedSobol {
     /// 32 bits, the reversed sample index only the high ones.
     #[inline(always)]
     pub fn get_1d_hashed(&self, dim: u32) -> f64 {
-        let key =
-            (dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ ((self.rev_index as u64) << 32);
-        (mix64(self.pixel_seed ^ key) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+        (mix64(self.pixel_seed ^ self.hash_key(dim)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 }
 
@@ -280,6 +292,57 @@ mod tests {
                 chi2 < 255.0 + 5.0 * 22.6,
                 "shift ({ds}, {dd}): chi2 {chi2:.1}"
             );
+        }
+    }
+
+    /// Chi-square of pairs over 16 x 16 cells, against a uniform joint distribution (255 degrees
+    /// of freedom: mean 255, sd 22.6).
+    fn chi2_16x16(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
+        let mut cells = [0u32; 256];
+        let mut n = 0u32;
+        for (a, b) in pairs {
+            cells[(a * 16.0) as usize * 16 + (b * 16.0) as usize] += 1;
+            n += 1;
+        }
+        let expected = n as f64 / 256.0;
+        cells
+            .iter()
+            .map(|&c| (c as f64 - expected).powi(2) / expected)
+            .sum()
+    }
+
+    /// A hashed pair's two numbers are uniform and independent of each other, of the next
+    /// dimension's pair and of the next sample's, over many pixels.
+    #[test]
+    fn hashed_pairs_are_uniform_and_independent() {
+        let point = |p: u64, s: u64, d: u32| PaddedSobol::new(3, p, 2 * s).get_2d_hashed(d);
+        let pixels = 0..16_000u64;
+        let samples = 0..8u64;
+        let all = || {
+            pixels
+                .clone()
+                .flat_map(|p| samples.clone().map(move |s| (p, s)))
+        };
+        let cases: [(&str, f64); 4] = [
+            ("x, y", chi2_16x16(all().map(|(p, s)| point(p, s, 7)))),
+            (
+                "y, next dimension's x",
+                chi2_16x16(all().map(|(p, s)| (point(p, s, 7).1, point(p, s, 8).0))),
+            ),
+            (
+                "x, next sample's x",
+                chi2_16x16(all().map(|(p, s)| (point(p, s, 7).0, point(p, s + 1, 7).0))),
+            ),
+            (
+                "x, a 1D number of the next dimension",
+                chi2_16x16(all().map(|(p, s)| {
+                    let one = PaddedSobol::new(3, p, 2 * s).get_1d_hashed(8);
+                    (point(p, s, 7).0, one)
+                })),
+            ),
+        ];
+        for (what, chi2) in cases {
+            assert!(chi2 < 255.0 + 5.0 * 22.6, "{what}: chi2 {chi2:.1}");
         }
     }
 
