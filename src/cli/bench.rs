@@ -38,7 +38,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             println!("crossover used by the scene build (accel::BVH_CROSSOVER): {BVH_CROSSOVER}");
         }
         BenchTarget::Scenes => scenes(args.spp)?,
-        BenchTarget::Error => error::run(args.seconds, &args.reference, args.smallpt.as_deref())?,
+        BenchTarget::Error => error::run(
+            args.seconds,
+            &args.reference,
+            args.smallpt.as_deref(),
+            args.rounds,
+        )?,
     }
     Ok(())
 }

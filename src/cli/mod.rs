@@ -72,6 +72,11 @@ pub struct BenchArgs {
     /// series) and print the targets as ratios to it, measured in the same run.
     #[arg(long, value_name = "BIN")]
     pub smallpt: Option<PathBuf>,
+    /// `error`: run the whole series this many times, smallpt before each round and after the
+    /// last; each round's ratios use the smallpt runs around it, and the targets report their
+    /// medians (shared machines drift by 10% and more within a run).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rounds: u32,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]

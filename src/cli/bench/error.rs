@@ -62,10 +62,16 @@ const INTEGRATORS: [IntegratorKind; 2] = [IntegratorKind::Path, IntegratorKind::
 /// error at equal time, so the bench measures both, side by side.
 pub const PLAIN_PATH: &str = "path[caustics=path]";
 
-pub fn run(seconds: f64, reference_path: &Path, smallpt: Option<&Path>) -> anyhow::Result<()> {
+pub fn run(
+    seconds: f64,
+    reference_path: &Path,
+    smallpt: Option<&Path>,
+    rounds: u32,
+) -> anyhow::Result<()> {
     let reference = load_reference(reference_path)?;
     let mut baseline = Vec::new();
-    // smallpt before and after ptui's series, so the machine's drift shows in its two runs.
+    // smallpt before and after each round of ptui's series, so the machine's drift shows in its
+    // runs and each round is compared with the smallpt runs around it.
     let run_baseline = |baseline: &mut Vec<_>| -> anyhow::Result<()> {
         if let Some(bin) = smallpt {
             let run = super::smallpt::run(bin, seconds, &reference)?;
@@ -80,12 +86,27 @@ pub fn run(seconds: f64, reference_path: &Path, smallpt: Option<&Path>) -> anyho
          closest-hit queries; RMSE against {}",
         reference_path.display()
     );
-    println!("{}", table_header());
-    let bench = measure(seconds, &reference, |row| println!("{}", table_row(row)))?;
-    run_baseline(&mut baseline)?;
-    print!("{}", ratios(&bench));
+    let mut benches = Vec::new();
+    for round in 0..rounds {
+        if rounds > 1 {
+            println!("round {} of {rounds}", round + 1);
+        }
+        println!("{}", table_header());
+        let bench = measure(seconds, &reference, |row| println!("{}", table_row(row)))?;
+        run_baseline(&mut baseline)?;
+        print!("{}", ratios(&bench));
+        benches.push(bench);
+    }
     if !baseline.is_empty() {
-        print!("{}", targets(&bench, &baseline));
+        let rounds: Vec<Round> = benches
+            .iter()
+            .enumerate()
+            .map(|(i, bench)| Round {
+                bench,
+                baseline: &baseline[i..i + 2],
+            })
+            .collect();
+        print!("{}", targets_over_rounds(&rounds));
     }
     Ok(())
 }
@@ -108,21 +129,67 @@ const SMALLPT_REFERENCE_SPEED: f64 = 2.6e6;
 
 /// The performance issue's targets as ratios to smallpt measured in this run.
 pub fn targets(bench: &ErrorBench, baseline: &[super::smallpt::BaselineRun]) -> String {
-    let (speed, rmse) = super::smallpt::mean(baseline, bench.seconds);
-    let find = |scene: &str, integrator: &str| {
+    targets_over_rounds(&[Round { bench, baseline }])
+}
+
+/// One round of `bench error`: ptui's series and the smallpt runs around it.
+pub struct Round<'a> {
+    pub bench: &'a ErrorBench,
+    pub baseline: &'a [super::smallpt::BaselineRun],
+}
+
+/// The median of `values` and, over several, their range: "1.70x" or "1.70x (1.62-1.74x)".
+fn summary(values: &[f64], digits: usize, unit: &str) -> (f64, String) {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    let median = if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    };
+    let text = if n > 1 {
+        format!(
+            "{median:.digits$}{unit} (median of {n} rounds, {:.digits$}-{:.digits$}{unit})",
+            v[0],
+            v[n - 1]
+        )
+    } else {
+        format!("{median:.digits$}{unit}")
+    };
+    (median, text)
+}
+
+/// The targets as ratios to smallpt, each round against its own smallpt runs, medians over the
+/// rounds.
+pub fn targets_over_rounds(rounds: &[Round]) -> String {
+    let Some(first) = rounds.first() else {
+        return String::new();
+    };
+    let seconds = first.bench.seconds;
+    let smallpt: Vec<(f64, f64)> = rounds
+        .iter()
+        .map(|r| super::smallpt::mean(r.baseline, seconds))
+        .collect();
+    let find = |bench: &'_ ErrorBench, scene: &str, integrator: &str| {
         bench
             .rows
             .iter()
             .find(|r| r.scene == scene && r.series.integrator == integrator)
+            .cloned()
     };
     let mut out = String::new();
+    let speeds: Vec<f64> = smallpt.iter().map(|s| s.0 / 1e6).collect();
+    let rmses: Vec<f64> = smallpt.iter().map(|s| s.1).collect();
+    let which = match rounds {
+        [one] => format!("mean of {} runs", one.baseline.len()),
+        _ => "each round: the mean of the runs before and after it".to_string(),
+    };
     let _ = writeln!(
         out,
-        "smallpt (mean of {} runs): {:.3} M paths/s, RMSE {:.5} at {} s",
-        baseline.len(),
-        speed / 1e6,
-        rmse,
-        bench.seconds
+        "smallpt ({which}): {} M paths/s, RMSE {} at {seconds} s",
+        summary(&speeds, 3, "").1,
+        summary(&rmses, 5, "").1,
     );
     for (scene, integrator, target) in [
         ("cornell", "naive", 6.0e6),
@@ -132,16 +199,29 @@ pub fn targets(bench: &ErrorBench, baseline: &[super::smallpt::BaselineRun]) -> 
         ("cornell-small-light", PLAIN_PATH, 4.0e6),
     ] {
         // Every sampler measured: smallpt's own is independent (erand48), ptui's default Sobol.
-        for r in bench
+        for r in first
+            .bench
             .rows
             .iter()
             .filter(|r| r.scene == scene && r.series.integrator == integrator)
         {
-            let ratio = r.paths_per_second / speed;
+            let ratios: Vec<f64> = rounds
+                .iter()
+                .zip(&smallpt)
+                .filter_map(|(round, (speed, _))| {
+                    let same = round
+                        .bench
+                        .rows
+                        .iter()
+                        .find(|o| o.scene == r.scene && o.series.label() == r.series.label())?;
+                    Some(same.paths_per_second / speed)
+                })
+                .collect();
+            let (ratio, text) = summary(&ratios, 2, "x");
             let want = target / SMALLPT_REFERENCE_SPEED;
             let _ = writeln!(
                 out,
-                "target {scene} {} paths/s >= {:.1} M on a 2.6 M smallpt machine: {ratio:.2}x \
+                "target {scene} {} paths/s >= {:.1} M on a 2.6 M smallpt machine: {text} \
                  smallpt, want >= {want:.2}x: {}",
                 r.series.label(),
                 target / 1e6,
@@ -150,23 +230,32 @@ pub fn targets(bench: &ErrorBench, baseline: &[super::smallpt::BaselineRun]) -> 
         }
     }
     for path in ["path", PLAIN_PATH] {
-        if let Some(e) = find("cornell", path).and_then(|r| r.rmse) {
-            let ratio = e / rmse;
+        let ratios: Vec<f64> = rounds
+            .iter()
+            .zip(&smallpt)
+            .filter_map(|(round, (_, rmse))| Some(find(round.bench, "cornell", path)?.rmse? / rmse))
+            .collect();
+        if !ratios.is_empty() {
+            let (ratio, text) = summary(&ratios, 3, "x");
             let _ = writeln!(
                 out,
-                "target cornell {path} RMSE at {} s <= smallpt's / 3: {ratio:.3}x smallpt's, want <= 0.333: {}",
-                bench.seconds,
+                "target cornell {path} RMSE at {seconds} s <= smallpt's / 3: {text} smallpt's, want <= 0.333: {}",
                 verdict(ratio <= 1.0 / 3.0)
             );
         }
-        if let (Some(p), Some(n)) = (
-            find("cornell-small-light", path),
-            find("cornell-small-light", "naive"),
-        ) {
-            let ratio = n.est_rmse / p.est_rmse;
+        let ratios: Vec<f64> = rounds
+            .iter()
+            .filter_map(|round| {
+                let p = find(round.bench, "cornell-small-light", path)?;
+                let n = find(round.bench, "cornell-small-light", "naive")?;
+                Some(n.est_rmse / p.est_rmse)
+            })
+            .collect();
+        if !ratios.is_empty() {
+            let (ratio, text) = summary(&ratios, 2, "");
             let _ = writeln!(
                 out,
-                "target cornell-small-light est. RMSE naive / {path} >= 5: {ratio:.2}: {}",
+                "target cornell-small-light est. RMSE naive / {path} >= 5: {text}: {}",
                 verdict(ratio >= 5.0)
             );
         }
@@ -455,6 +544,59 @@ mod tests {
         assert!(text.contains("cornell path[caustics=path] RMSE at 10 s <= smallpt's / 3: 0.400x smallpt's, want <= 0.333: not met"), "{text}");
         assert!(
             text.contains("naive / path[caustics=path] >= 5: 4.00: not met"),
+            "{text}"
+        );
+    }
+
+    /// With rounds, each round's speed is divided by the smallpt runs around it (not by the mean
+    /// of all), and the verdicts go by the median round.
+    #[test]
+    fn rounds_compare_with_their_own_smallpt_runs_and_report_medians() {
+        let bench = |speedup: f64| {
+            let mut r = row("cornell", series("path", &[(10.0, 0.03)]), 10.0);
+            r.paths_per_second *= speedup;
+            ErrorBench {
+                seconds: 10.0,
+                rows: vec![r],
+            }
+        };
+        let run = |speed: f64| super::super::smallpt::BaselineRun {
+            spp: 100,
+            seconds: 10.0,
+            paths_per_second: speed,
+            rmse: 0.1,
+        };
+        // The machine slows down between rounds, ptui with it: every round is 2x the mean of
+        // the smallpt runs around it, though against the mean of all smallpt runs (0.375 M) the
+        // rounds would read 2.67x, 2.00x and 1.33x.
+        let (benches, baseline) = (
+            [bench(1.0), bench(0.75), bench(0.5)],
+            [run(0.5e6), run(0.5e6), run(0.25e6), run(0.25e6)],
+        );
+        let rounds = [
+            Round {
+                bench: &benches[0],
+                baseline: &baseline[0..2],
+            },
+            Round {
+                bench: &benches[1],
+                baseline: &baseline[1..3],
+            },
+            Round {
+                bench: &benches[2],
+                baseline: &baseline[2..4],
+            },
+        ];
+        let text = targets_over_rounds(&rounds);
+        assert!(
+            text.contains("cornell path/sobol paths/s >= 4.5 M on a 2.6 M smallpt machine: 2.00x (median of 3 rounds, 2.00-2.00x) smallpt"),
+            "{text}"
+        );
+        // The RMSE ratio with it: 0.03 against smallpt's 0.1 in every round.
+        assert!(
+            text.contains(
+                "0.300x (median of 3 rounds, 0.300-0.300x) smallpt's, want <= 0.333: met"
+            ),
             "{text}"
         );
     }
