@@ -42,8 +42,11 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-/// Allocations per pass over passes 4..8 of `name` at `width` x `height` (after the pilot
-/// passes' warm-up), and the samples those passes took.
+/// Allocations per pass of `name` at `width` x `height` after the pilot passes' warm-up, and the
+/// samples those passes took: the fewest of three windows of 4 passes. A thread the host kept
+/// off the CPU through the warm-up grows its row buffers in a later pass (seen once on a busy
+/// host: 6.5 a pass for naive at 64x48); a loop that allocated per row or sample would do so in
+/// every window.
 fn allocations_per_pass(name: &str, integrator: IntegratorKind, width: u32) -> (f64, f64) {
     let scene = Arc::new(scene::load(name).expect("built-in scene"));
     let mut settings = RenderSettings::merged(&[&scene.render]);
@@ -57,12 +60,17 @@ fn allocations_per_pass(name: &str, integrator: IntegratorKind, width: u32) -> (
     for _ in 0..4 {
         r.run_pass(&cancel);
     }
-    let (before, samples) = (ALLOCATIONS.load(Ordering::Relaxed), r.stats().samples);
-    for _ in 0..4 {
-        r.run_pass(&cancel);
-    }
-    let allocations = (ALLOCATIONS.load(Ordering::Relaxed) - before) as f64 / 4.0;
-    (allocations, (r.stats().samples - samples) as f64 / 4.0)
+    (0..3)
+        .map(|_| {
+            let (before, samples) = (ALLOCATIONS.load(Ordering::Relaxed), r.stats().samples);
+            for _ in 0..4 {
+                r.run_pass(&cancel);
+            }
+            let allocations = (ALLOCATIONS.load(Ordering::Relaxed) - before) as f64 / 4.0;
+            (allocations, (r.stats().samples - samples) as f64 / 4.0)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .expect("three windows")
 }
 
 #[test]
