@@ -138,11 +138,15 @@ pub struct Round<'a> {
     pub baseline: &'a [super::smallpt::BaselineRun],
 }
 
-/// The median of `values` and, over several, their range: "1.70x" or "1.70x (1.62-1.74x)".
+/// The median of `values` and, over several, their range: "1.70x", or "1.70x (median of 3
+/// rounds, 1.62-1.74x)"; NaN and "-" for none.
 fn summary(values: &[f64], digits: usize, unit: &str) -> (f64, String) {
     let mut v = values.to_vec();
     v.sort_by(f64::total_cmp);
     let n = v.len();
+    if n == 0 {
+        return (f64::NAN, "-".to_string());
+    }
     let median = if n % 2 == 1 {
         v[n / 2]
     } else {
