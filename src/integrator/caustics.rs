@@ -1175,7 +1175,7 @@ mod tests {
         assert_uniform(seen, &counts, 2);
     }
 
-    /// A camera vertex attempts its join with probability `attempt`, and an attempt that goes
+    /// A camera vertex attempts its join with probability [`JOIN_ATTEMPT`], and an attempt that goes
     /// ahead still picks every vertex left with probability 1 / seen and leaves a uniform number
     /// for the roulette: chi-square over (vertex, half of that number), and the draws it took
     /// to see the trials' attempts against their negative binomial law, 5 sigma each.

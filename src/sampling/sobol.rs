@@ -273,20 +273,14 @@ mod tests {
     #[test]
     fn hashed_numbers_are_uniform_and_independent() {
         for (ds, dd) in [(1u64, 0u32), (0, 1)] {
-            let mut cells = [0u32; 256];
-            let n = 128_000u64;
-            for p in 0..n / 8 {
-                for s in 0..8u64 {
+            let pairs = (0..128_000u64 / 8).flat_map(|p| {
+                (0..8u64).map(move |s| {
                     let a = PaddedSobol::new(3, p, 2 * s).get_1d_hashed(5);
                     let b = PaddedSobol::new(3, p, 2 * (s + ds)).get_1d_hashed(5 + dd);
-                    cells[(a * 16.0) as usize * 16 + (b * 16.0) as usize] += 1;
-                }
-            }
-            let expected = n as f64 / 256.0;
-            let chi2: f64 = cells
-                .iter()
-                .map(|&c| (c as f64 - expected).powi(2) / expected)
-                .sum();
+                    (a, b)
+                })
+            });
+            let chi2 = chi2_16x16(pairs);
             // 255 degrees of freedom: mean 255, sd 22.6; fail beyond 5 sd.
             assert!(
                 chi2 < 255.0 + 5.0 * 22.6,
