@@ -175,13 +175,12 @@ pub fn targets_over_rounds(rounds: &[Round]) -> String {
         .iter()
         .map(|r| super::smallpt::mean(r.baseline, seconds))
         .collect();
-    let find = |bench: &'_ ErrorBench, scene: &str, integrator: &str| {
+    fn find<'a>(bench: &'a ErrorBench, scene: &str, integrator: &str) -> Option<&'a ErrorRow> {
         bench
             .rows
             .iter()
             .find(|r| r.scene == scene && r.series.integrator == integrator)
-            .cloned()
-    };
+    }
     let mut out = String::new();
     let speeds: Vec<f64> = smallpt.iter().map(|s| s.0 / 1e6).collect();
     let rmses: Vec<f64> = smallpt.iter().map(|s| s.1).collect();
