@@ -111,6 +111,11 @@ impl Schedule {
         self
     }
 
+    /// The time of the next checkpoint by time.
+    pub fn next_time(&self) -> f64 {
+        self.next_time
+    }
+
     /// Whether the pass that just ended at (`seconds`, `spp`) crossed a scheduled checkpoint;
     /// consumes every checkpoint it crossed (a slow pass may cross several, recorded once).
     pub fn due(&mut self, seconds: f64, spp: u32) -> bool {
@@ -172,7 +177,15 @@ pub fn run_series(
     // At least two passes whatever the time, so that every series has a checkpoint.
     while !r.done() && (r.stats().elapsed.as_secs_f64() < seconds || r.stats().complete_passes < 2)
     {
-        if r.run_pass(cancel) == PassOutcome::Cancelled {
+        // As many passes as fit before the next checkpoint (and the end), one at a time near it.
+        let t = r.stats().elapsed.as_secs_f64();
+        let until = schedule.next_time().min(seconds) - t;
+        let n = if schedule.spps.is_empty() {
+            r.batch_within(until)
+        } else {
+            1
+        };
+        if r.run_passes(cancel, n) == PassOutcome::Cancelled {
             break;
         }
         let st = r.stats();

@@ -240,6 +240,32 @@ impl Film {
             )
     }
 
+    /// The film in bands of `rows` rows, in order: [`Film::par_bands`] for a caller that hands
+    /// them out itself.
+    pub fn bands(&mut self, rows: u32) -> impl ExactSizeIterator<Item = FilmRows<'_>> {
+        let width = self.width;
+        let chunk = (rows * width) as usize;
+        self.mean
+            .px
+            .chunks(chunk)
+            .zip(self.m2.chunks_mut(chunk))
+            .zip(self.count.chunks_mut(chunk))
+            .zip(self.odd_mean.chunks_mut(chunk))
+            .zip(self.odd_count.chunks_mut(chunk))
+            .enumerate()
+            .map(
+                move |(band, ((((mean, m2), count), odd_mean), odd_count))| FilmRows {
+                    first_row: band as u32 * rows,
+                    width,
+                    mean,
+                    m2,
+                    count,
+                    odd_mean,
+                    odd_count,
+                },
+            )
+    }
+
     #[inline]
     pub fn mean(&self, i: usize) -> DVec3 {
         DVec3::from_array(self.mean.get(i))

@@ -1,5 +1,6 @@
-//! The progressive driver: whole-image passes of one sample per pixel, parallel over bands of
-//! rows on a rayon pool, with a cancel flag checked every row.
+//! The progressive driver: whole-image passes of one sample per pixel (or as the adaptive map
+//! says), run in batches of several passes whose (pass, band of rows) items the threads of a
+//! rayon pool take in turn, with a cancel flag checked every band.
 //!
 //! Random numbers derive from (seed, pixel, pass), so the image is the same bit for bit whatever
 //! the thread count. A cancelled pass still counts as started: resuming goes on with the next pass
@@ -7,7 +8,7 @@
 
 use crate::adaptive::{SampleMap, PILOT_PASSES};
 use crate::cpu::{v3_copy, ShadingCode};
-use crate::film::{ErrorEstimate, Film};
+use crate::film::{ErrorEstimate, Film, FilmRows};
 use crate::integrator;
 use crate::integrator::caustics::{CausticPass, CausticTracer, PassSplats};
 use crate::math::{DVec3, Ray};
@@ -15,8 +16,8 @@ use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::settings::{IntegratorKind, RenderSettings};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,7 +101,7 @@ pub struct Renderer {
     /// pass's rows were: a pass's light paths depend only on the seed and the pass, so tracing
     /// them a pass early changes no bit of the image, and the tracer's few long chunks no longer
     /// leave a core idle before the rows start.
-    ahead: Option<(u32, PassSplats)>,
+    ahead: Vec<(u32, PassSplats)>,
 }
 
 /// A rayon pool with `threads` workers (0 = one per core).
@@ -143,7 +144,7 @@ impl Renderer {
             stats: RenderStats::default(),
             error: None,
             map: None,
-            ahead: None,
+            ahead: Vec::new(),
         })
     }
 
@@ -232,68 +233,112 @@ impl Renderer {
 
     /// Add one sample to every pixel, unless cancelled on the way.
     pub fn run_pass(&mut self, cancel: &AtomicBool) -> PassOutcome {
+        self.run_passes(cancel, 1)
+    }
+
+    /// Up to `max` passes in one sweep over the rows ([`Renderer::batch_len`] says how many): each
+    /// row takes its samples of every pass of the batch in turn, so the threads wait for each
+    /// other once a batch instead of once a pass. Each sample is the one its pass alone would
+    /// take, added to its pixel in the same order, so the image is the same bit for bit.
+    /// Complete only if every pass of the batch covered every pixel.
+    pub fn run_passes(&mut self, cancel: &AtomicBool, max: u32) -> PassOutcome {
         let started = Instant::now();
-        let pass = self.stats.passes;
-        self.stats.passes += 1;
-        if self.adaptive() && self.map.is_none() && pass >= PILOT_PASSES && pass.is_multiple_of(2) {
+        let first = self.stats.passes;
+        if self.adaptive() && self.map.is_none() && first >= PILOT_PASSES && first.is_multiple_of(2)
+        {
             let film = &self.film;
-            self.map = Some(self.pool.install(|| SampleMap::build(film, pass)));
+            self.map = Some(self.pool.install(|| SampleMap::build(film, first)));
         }
+        let n = self.batch_len(max);
+        self.stats.passes += n;
         let map = self.map.as_ref();
         let scene = &*self.scene;
         let settings = &self.settings;
         let threads = self.pool.current_num_threads() as u32;
-        // Enough bands that both cores stay busy to the end of the pass, few enough that the
+        // Enough bands that both cores stay busy to the end of the batch, few enough that the
         // per-task overhead is nothing next to a row of paths. A thread finishing its last band
-        // early idles until the pass ends: 7-row bands at 320x240 (height / 16 per thread) cost
+        // early idles until the batch ends (measured with one pass a batch: 7-row bands at 320x240 (height / 16 per thread) cost
         // path 1.3% and naive 0.4% against the 1-row bands of height / 64 per thread (2 threads,
-        // medians of 5 alternating runs; 1 -> 2 threads went 1.89x -> 1.90x for naive).
+        // medians of 5 alternating runs; 1 -> 2 threads went 1.89x -> 1.90x for naive)).
         let band_rows = (settings.height / (threads * 64)).clamp(1, 8);
         let counters = PassCounters::default();
         let tracer = self.caustics.as_ref();
-        let splats = match (tracer, self.ahead.take()) {
-            (Some(_), Some((p, traced))) if p == pass => traced,
-            (Some(t), _) if !cancel.load(Ordering::Relaxed) => self
-                .pool
-                .install(|| t.trace_pass(scene, settings.seed, pass)),
-            _ => PassSplats::default(),
+        let mut ahead = std::mem::take(&mut self.ahead);
+        let splats: Vec<PassSplats> = (first..first + n)
+            .map(|pass| match ahead.iter().position(|(p, _)| *p == pass) {
+                Some(i) => ahead.remove(i).1,
+                None => match tracer {
+                    Some(t) if !cancel.load(Ordering::Relaxed) => self
+                        .pool
+                        .install(|| t.trace_pass(scene, settings.seed, pass)),
+                    _ => PassSplats::default(),
+                },
+            })
+            .collect();
+        // Traced ahead for passes before this batch's: a cancelled batch's, never to be used.
+        ahead.retain(|(p, _)| *p >= first + n);
+        // The next batch's light paths (as many passes as this one takes, those not traced
+        // yet) are traced beside this batch's rows (each core takes rows when its light-path
+        // chunk is done), unless the render stops after this batch by its sample count. Two
+        // batches' splats and ends are then alive at once, so only where they are small
+        // (`large_passes`: at most 1 MiB of ends a pass); large passes have enough chunks to
+        // share between the cores evenly anyway.
+        let left_after =
+            (settings.spp.saturating_sub(self.stats.complete_passes)).saturating_sub(n);
+        let trace_next = tracer.filter(|t| !t.large_passes() && !cancel.load(Ordering::Relaxed));
+        let next_passes: Vec<u32> = match trace_next {
+            Some(_) => ((first + n)..(first + n + n.min(left_after)))
+                .filter(|p| ahead.iter().all(|(q, _)| q != p))
+                .collect(),
+            None => Vec::new(),
         };
-        // The next pass's light paths are traced beside this pass's rows (each core takes
-        // rows when its light-path chunk is done), unless the render stops after this pass by
-        // its sample count. Two passes' splats and ends are then alive at once, so only where
-        // they are small (`large_passes`: at most 1 MiB of ends); large passes have enough
-        // chunks to share between the cores evenly anyway.
-        let trace_next = tracer.filter(|t| {
-            !t.large_passes() && pass + 1 < settings.spp && !cancel.load(Ordering::Relaxed)
-        });
-        let mut next: Option<PassSplats> = None;
-        self.stats.rays += splats.rays;
-        self.stats.light_rays += splats.rays;
-        self.stats.light_paths += splats.paths;
-        let splats = &splats;
-        let caustics = self.caustics.as_ref().map(|tracer| splats.pass(tracer));
-        let pass_rows = PassRows {
-            scene,
-            settings,
-            pass,
-            map,
-            caustics,
-        };
+        let mut next = ahead;
+        for s in &splats {
+            self.stats.rays += s.rays;
+            self.stats.light_rays += s.rays;
+            self.stats.light_paths += s.paths;
+        }
+        let batch: Vec<PassRows> = (first..first + n)
+            .zip(&splats)
+            .map(|(pass, s)| PassRows {
+                scene,
+                settings,
+                pass,
+                map,
+                caustics: tracer.map(|t| s.pass(t)),
+            })
+            .collect();
         let film = &mut self.film;
         self.pool.install(|| {
             rayon::join(
-                || next = trace_next.map(|t| t.trace_pass(scene, settings.seed, pass + 1)),
-                || trace_rows(film, band_rows, &pass_rows, splats, cancel, &counters),
+                || {
+                    if let Some(t) = trace_next {
+                        next.extend(
+                            next_passes
+                                .iter()
+                                .map(|&p| (p, t.trace_pass(scene, settings.seed, p))),
+                        );
+                    }
+                },
+                || {
+                    trace_rows(
+                        film,
+                        band_rows,
+                        &batch,
+                        &splats,
+                        cancel,
+                        &counters,
+                        threads as usize,
+                    )
+                },
             )
         });
-        if let Some(traced) = next {
-            self.ahead = Some((pass + 1, traced));
-        }
+        self.ahead = next;
         self.stats.samples += counters.samples.into_inner();
         self.stats.invalid += counters.invalid.into_inner();
         self.stats.rays += counters.rays.into_inner();
-        let outcome = if counters.rows.into_inner() == settings.height as u64 {
-            self.stats.complete_passes += 1;
+        let outcome = if counters.rows.into_inner() == settings.height as u64 * n as u64 {
+            self.stats.complete_passes += n;
             if settings.target_error.is_some() {
                 // On the render pool, and counted in the render time: the check is part of it.
                 let (film, halves) = (&self.film, self.error_from_halves());
@@ -307,10 +352,66 @@ impl Renderer {
         outcome
     }
 
-    /// Render until the target spp or target error, `cancel`, or `on_pass` returning false.
+    /// Complete passes still to run by the sample count (at least one: a render past its count
+    /// only runs when asked to).
+    fn passes_left(&self) -> u32 {
+        self.settings
+            .spp
+            .saturating_sub(self.stats.complete_passes)
+            .max(1)
+    }
+
+    /// How many of up to `max` passes the next batch takes: no more than the sample count
+    /// leaves; one where a pass's light paths are large (two batches' would be alive at once);
+    /// and none past the pass where the adaptive map is built from the film.
+    fn batch_len(&self, max: u32) -> u32 {
+        let mut n = max.clamp(1, MAX_BATCH).min(self.passes_left());
+        if self.caustics.as_ref().is_some_and(|t| t.large_passes()) {
+            n = 1;
+        }
+        if self.adaptive() && self.map.is_none() {
+            let build = (self.stats.passes + 1)
+                .max(PILOT_PASSES)
+                .next_multiple_of(2);
+            n = n.min(build - self.stats.passes);
+        }
+        n
+    }
+
+    /// The batch [`Renderer::render`] runs: about [`BATCH_SAMPLES`] camera samples, whatever
+    /// the machine; one pass with a target error, which stops the render after the first pass
+    /// at or below it.
+    pub fn default_batch(&self) -> u32 {
+        if self.settings.target_error.is_some() {
+            return 1;
+        }
+        let pixels = self.settings.pixels().max(1) as u64;
+        (BATCH_SAMPLES / pixels).clamp(1, MAX_BATCH as u64) as u32
+    }
+
+    /// A batch of about `seconds` at the speed of the passes so far (one pass before any has
+    /// run), within [`Renderer::default_batch`]: for callers that check in on a clock (the
+    /// TUI's frames, the error report's checkpoints).
+    pub fn batch_within(&self, seconds: f64) -> u32 {
+        let passes = self.stats.passes;
+        if passes == 0 {
+            return 1;
+        }
+        let per_pass = self.stats.elapsed.as_secs_f64() / passes as f64;
+        let fit = if per_pass > 0.0 {
+            (seconds / per_pass).clamp(1.0, MAX_BATCH as f64) as u32
+        } else {
+            MAX_BATCH
+        };
+        fit.min(self.default_batch())
+    }
+
+    /// Render until the target spp or target error, `cancel`, or `on_pass` returning false, in
+    /// batches of [`Renderer::default_batch`] passes; `on_pass` sees the film after each batch.
     pub fn render(&mut self, cancel: &AtomicBool, mut on_pass: impl FnMut(&Renderer) -> bool) {
         while !self.done() {
-            if self.run_pass(cancel) == PassOutcome::Cancelled || !on_pass(self) {
+            let n = self.default_batch();
+            if self.run_passes(cancel, n) == PassOutcome::Cancelled || !on_pass(self) {
                 break;
             }
         }
@@ -422,6 +523,13 @@ pub struct RowScratch {
     pub plan: Vec<(u32, u64)>,
 }
 
+/// Most passes one batch takes ([`Renderer::run_passes`]).
+pub const MAX_BATCH: u32 = 16;
+
+/// About how many camera samples [`Renderer::render`]'s batches take: at 320x240, 13 passes,
+/// a third of a second.
+const BATCH_SAMPLES: u64 = 1 << 20;
+
 /// What the threads of one pass count, added to the render's stats at its end.
 #[derive(Default)]
 struct PassCounters {
@@ -432,59 +540,129 @@ struct PassCounters {
     rows: AtomicU64,
 }
 
-/// The rows of one pass on the current pool, in bands of `band_rows`: every pixel's samples
-/// (`sample_row`) plus the pass's splats at that pixel, into the film.
+/// The rows of a batch of passes on the current pool's `threads` threads: every pixel's samples
+/// of each pass (`sample_row`) plus that pass's splats at that pixel, into the film. The
+/// threads take (pass, band of `band_rows` rows) items in pass order from one counter, so a
+/// thread never waits for the others at a pass's end: only when it reaches a band whose
+/// previous pass another thread still holds (each band takes its passes in order, so the image
+/// is the same bit for bit). A thread the host takes off its core in mid-band then holds up the
+/// others after a pass's worth of work at the earliest, not at the end of every pass.
 fn trace_rows(
     film: &mut Film,
     band_rows: u32,
-    pass_rows: &PassRows,
-    splats: &PassSplats,
+    batch: &[PassRows],
+    splats: &[PassSplats],
     cancel: &AtomicBool,
     counters: &PassCounters,
+    threads: usize,
 ) {
-    film.par_bands(band_rows).for_each(|mut band| {
-        let (mut bad, mut done, mut traced, mut rows) = (0u64, 0u64, 0u64, 0u64);
-        let first = band.first_row * pass_rows.settings.width;
-        let mut band_splats = splats
-            .range(first, first + band.rows() * pass_rows.settings.width)
-            .iter()
-            .peekable();
-        ROW_BUFFERS.with_borrow_mut(|(scratch, values)| {
-            for row in 0..band.rows() {
-                if cancel.load(Ordering::Relaxed) {
-                    break;
-                }
-                let y = band.first_row + row;
-                sample_row(pass_rows, y, scratch, values);
-                // Each of a pixel's samples of this pass gets the pass's splats: each sum
-                // is an unbiased estimate (they share the splats' noise, which is why the
-                // error is then read from the half-buffers, split by pass).
-                let mut splat = (u32::MAX, DVec3::ZERO);
-                for (&(x, _), &(v, r)) in scratch.plan.iter().zip(values.iter()) {
-                    let pixel = y * pass_rows.settings.width + x;
-                    if splat.0 != pixel {
-                        splat = (pixel, DVec3::ZERO);
-                        while let Some(s) = band_splats.next_if(|s| s.0 == pixel) {
-                            splat.1 += glam::Vec3::from_array(s.1).as_dvec3();
-                        }
-                    }
-                    let v = v + splat.1;
-                    done += 1;
-                    traced += r as u64;
-                    if v.is_finite() {
-                        band.add(x, row, pass_rows.pass, v);
-                    } else {
-                        bad += 1;
-                    }
-                }
-                rows += 1;
+    // Each band with the batch's index of the pass it takes next.
+    let bands: Vec<Mutex<(FilmRows, usize)>> = film
+        .bands(band_rows)
+        .map(|band| Mutex::new((band, 0)))
+        .collect();
+    let items = bands.len() * batch.len();
+    let next = AtomicUsize::new(0);
+    let work = || {
+        let mut tally = PassTally::default();
+        ROW_BUFFERS.with_borrow_mut(|(scratch, values)| loop {
+            let item = next.fetch_add(1, Ordering::Relaxed);
+            if item >= items || cancel.load(Ordering::Relaxed) {
+                break;
             }
+            let (k, b) = (item / bands.len(), item % bands.len());
+            let Some(mut band) = band_turn(&bands[b], k, cancel) else {
+                break;
+            };
+            let film_rows = &mut band.0;
+            for row in 0..film_rows.rows() {
+                trace_row(
+                    &batch[k], &splats[k], film_rows, row, scratch, values, &mut tally,
+                );
+            }
+            band.1 = k + 1;
         });
-        counters.rows.fetch_add(rows, Ordering::Relaxed);
-        counters.invalid.fetch_add(bad, Ordering::Relaxed);
-        counters.samples.fetch_add(done, Ordering::Relaxed);
-        counters.rays.fetch_add(traced, Ordering::Relaxed);
-    })
+        tally.add_to(counters);
+    };
+    (0..threads.max(1)).into_par_iter().for_each(|_| work());
+}
+
+/// The band `band` once its turn for the batch's pass `k` has come (the thread holding its
+/// pass k - 1 took its item before this one, so it is tracing it or about to); None if the
+/// render is cancelled meanwhile.
+fn band_turn<'a, T>(
+    band: &'a Mutex<(T, usize)>,
+    k: usize,
+    cancel: &AtomicBool,
+) -> Option<std::sync::MutexGuard<'a, (T, usize)>> {
+    loop {
+        // A panicking thread has already failed the render; its band's state is still whole.
+        let guard = band.lock().unwrap_or_else(|e| e.into_inner());
+        if guard.1 == k {
+            return Some(guard);
+        }
+        drop(guard);
+        if cancel.load(Ordering::Relaxed) {
+            return None;
+        }
+        std::thread::yield_now();
+    }
+}
+
+/// What one thread counts over a batch, added to the pass counters once at its end.
+#[derive(Default)]
+struct PassTally {
+    bad: u64,
+    done: u64,
+    traced: u64,
+    rows: u64,
+}
+
+impl PassTally {
+    fn add_to(&self, counters: &PassCounters) {
+        counters.rows.fetch_add(self.rows, Ordering::Relaxed);
+        counters.invalid.fetch_add(self.bad, Ordering::Relaxed);
+        counters.samples.fetch_add(self.done, Ordering::Relaxed);
+        counters.rays.fetch_add(self.traced, Ordering::Relaxed);
+    }
+}
+
+/// Row `row` of `band` in one pass: its samples ([`sample_row`]) and the pass's splats.
+fn trace_row(
+    pass_rows: &PassRows,
+    splats: &PassSplats,
+    band: &mut FilmRows,
+    row: u32,
+    scratch: &mut RowScratch,
+    values: &mut Vec<(DVec3, u32)>,
+    tally: &mut PassTally,
+) {
+    let width = pass_rows.settings.width;
+    let y = band.first_row + row;
+    sample_row(pass_rows, y, scratch, values);
+    let mut row_splats = splats.range(y * width, (y + 1) * width).iter().peekable();
+    // Each of a pixel's samples of this pass gets the pass's splats: each sum is an unbiased
+    // estimate (they share the splats' noise, which is why the error is then read from the
+    // half-buffers, split by pass). Every pixel takes at least one sample a pass.
+    let mut splat = (u32::MAX, DVec3::ZERO);
+    for (&(x, _), &(v, r)) in scratch.plan.iter().zip(values.iter()) {
+        let pixel = y * width + x;
+        if splat.0 != pixel {
+            splat = (pixel, DVec3::ZERO);
+            while let Some(s) = row_splats.next_if(|s| s.0 == pixel) {
+                splat.1 += glam::Vec3::from_array(s.1).as_dvec3();
+            }
+        }
+        let v = v + splat.1;
+        tally.done += 1;
+        tally.traced += r as u64;
+        if v.is_finite() {
+            band.add(x, row, pass_rows.pass, v);
+        } else {
+            tally.bad += 1;
+        }
+    }
+    tally.rows += 1;
 }
 
 /// What every row of one pass shares: the scene, the settings, the pass, its adaptive map (none
@@ -626,16 +804,190 @@ mod tests {
             // 16 on are adaptive, which the light paths do not depend on).
             let expect_ahead = pass + 1 < 20;
             assert_eq!(
-                ahead.ahead.as_ref().map(|a| a.0),
-                expect_ahead.then_some(pass + 1)
+                ahead.ahead.iter().map(|a| a.0).collect::<Vec<_>>(),
+                expect_ahead
+                    .then_some(pass + 1)
+                    .into_iter()
+                    .collect::<Vec<_>>()
             );
-            own.ahead = None;
+            own.ahead.clear();
             assert_eq!(own.run_pass(&cancel), PassOutcome::Complete);
         }
         assert_eq!(ahead.stats().light_paths, own.stats().light_paths);
         assert_eq!(ahead.stats().rays, own.stats().rays);
         let (a, b) = (ahead.film().mean_rgb_f32(), own.film().mean_rgb_f32());
         assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+    }
+
+    /// A render in batches of passes is the render pass by pass, bit for bit: on two threads
+    /// against one, with light-traced caustics (the next batch's traced beside each batch) and
+    /// the adaptive map (built at pass 16, where a batch must end). Batches stop at the map's
+    /// pass and at the sample count.
+    #[test]
+    fn batches_of_passes_give_the_image_of_single_passes() {
+        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
+        let mut settings = RenderSettings::merged(&[&scene.render]);
+        (settings.width, settings.height, settings.spp) = (64, 48, 27);
+        assert!(settings.adaptive);
+        settings.threads = 2;
+        let cancel = AtomicBool::new(false);
+        let mut batched = Renderer::new(scene.clone(), settings.clone()).expect("settings");
+        settings.threads = 1;
+        let mut single = Renderer::new(scene, settings).expect("settings");
+        let mut lengths = Vec::new();
+        for max in [5, 2, 7].into_iter().cycle() {
+            if batched.done() {
+                break;
+            }
+            let before = batched.stats().passes;
+            assert_eq!(batched.run_passes(&cancel, max), PassOutcome::Complete);
+            lengths.push(batched.stats().passes - before);
+            if before == 5 {
+                // Passes 5-9 were traced beside passes 0-4: the three this batch left stay.
+                let ahead: Vec<u32> = batched.ahead.iter().map(|a| a.0).collect();
+                assert_eq!(ahead, [7, 8, 9]);
+            }
+        }
+        // 0-15 pilot passes, the map built at 16, then to the sample count.
+        assert_eq!(lengths, [5, 2, 7, 2, 2, 7, 2]);
+        assert_eq!(batched.stats().complete_passes, 27);
+        while !single.done() {
+            assert_eq!(single.run_pass(&cancel), PassOutcome::Complete);
+        }
+        assert!(batched.sample_map().is_some());
+        let (a, b) = (batched.stats(), single.stats());
+        assert_eq!(
+            (a.samples, a.rays, a.light_paths, a.passes),
+            (b.samples, b.rays, b.light_paths, b.passes)
+        );
+        let (a, b) = (batched.film(), single.film());
+        for i in 0..a.pixels() {
+            assert_eq!(a.count(i), b.count(i));
+            assert_eq!(
+                a.mean(i).to_array().map(f64::to_bits),
+                b.mean(i).to_array().map(f64::to_bits)
+            );
+            assert_eq!(a.variance_of_mean(i), b.variance_of_mean(i));
+            assert_eq!(a.half_buffer_variance(i), b.half_buffer_variance(i));
+        }
+    }
+
+    /// The batch length: at most [`MAX_BATCH`], what the sample count leaves, up to the pass
+    /// that builds the adaptive map; one pass where a pass's light paths are large.
+    #[test]
+    fn batches_end_at_the_sample_count_and_the_adaptive_map() {
+        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
+        let mut settings = RenderSettings::merged(&[&scene.render]);
+        (settings.width, settings.height, settings.spp) = (32, 24, 100);
+        let cancel = AtomicBool::new(false);
+        let mut r = Renderer::new(scene.clone(), settings.clone()).expect("settings");
+        assert_eq!(r.batch_len(1000), MAX_BATCH);
+        assert_eq!(r.batch_len(0), 1);
+        r.run_passes(&cancel, 3);
+        // The map is built at pass 16: from pass 3, 13 passes.
+        assert_eq!(r.batch_len(1000), 13);
+        r.run_passes(&cancel, 1000);
+        assert_eq!(r.stats().passes, 16);
+        assert!(r.sample_map().is_none());
+        r.run_passes(&cancel, 1000);
+        assert!(r.sample_map().is_some());
+        assert_eq!(r.stats().passes, 32);
+        while r.stats().complete_passes < 95 {
+            r.run_passes(&cancel, 1);
+        }
+        assert_eq!(r.batch_len(1000), 5);
+        settings.adaptive = false;
+        let r = Renderer::new(scene.clone(), settings.clone()).expect("settings");
+        assert_eq!(r.batch_len(1000), MAX_BATCH);
+        // Large passes (over 1 MiB of light-path ends: cornell at 1280x720).
+        (settings.width, settings.height) = (1280, 720);
+        let r = Renderer::new(scene, settings).expect("settings");
+        assert!(r.caustics.as_ref().is_some_and(|t| t.large_passes()));
+        assert_eq!(r.batch_len(1000), 1);
+    }
+
+    /// `render`'s batches hold about `BATCH_SAMPLES` samples whatever the machine, and one pass
+    /// with a target error (the render stops after the first pass at or below it); a batch by
+    /// time stays within that.
+    #[test]
+    fn the_default_batch_follows_the_image_size_and_the_target_error() {
+        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
+        let mut settings = RenderSettings::merged(&[&scene.render]);
+        (settings.width, settings.height) = (320, 240);
+        let r = Renderer::new(scene.clone(), settings.clone()).expect("settings");
+        assert_eq!(r.default_batch(), 13);
+        (settings.width, settings.height) = (1920, 1080);
+        let r = Renderer::new(scene.clone(), settings.clone()).expect("settings");
+        assert_eq!(r.default_batch(), 1);
+        (settings.width, settings.height) = (64, 48);
+        let mut r = Renderer::new(scene.clone(), settings.clone()).expect("settings");
+        assert_eq!(r.default_batch(), MAX_BATCH);
+        // By time: one pass before any has run, then as many as fit.
+        assert_eq!(r.batch_within(1.0), 1);
+        r.stats.passes = 10;
+        r.stats.elapsed = Duration::from_millis(100);
+        assert_eq!(r.batch_within(0.05), 5);
+        assert_eq!(r.batch_within(0.001), 1);
+        assert_eq!(r.batch_within(10.0), MAX_BATCH);
+        settings.target_error = Some(0.1);
+        let mut r = Renderer::new(scene, settings).expect("settings");
+        assert_eq!(r.default_batch(), 1);
+        r.stats.passes = 10;
+        r.stats.elapsed = Duration::from_millis(100);
+        assert_eq!(r.batch_within(10.0), 1);
+    }
+
+    /// A band goes to the threads in the order of its passes, whatever order they ask in; a
+    /// thread waiting for a turn that never comes gives up when the render is cancelled.
+    #[test]
+    fn a_band_takes_its_passes_in_order() {
+        let band = Mutex::new((Vec::new(), 0));
+        let cancel = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            for k in [3, 1, 4, 0, 2] {
+                let (band, cancel) = (&band, &cancel);
+                s.spawn(move || {
+                    let mut turn = band_turn(band, k, cancel).expect("not cancelled");
+                    turn.0.push(k);
+                    turn.1 = k + 1;
+                });
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        });
+        assert_eq!(band.lock().expect("not poisoned").0, [0, 1, 2, 3, 4]);
+        std::thread::scope(|s| {
+            let waiting = s.spawn(|| band_turn(&band, 7, &cancel).is_none());
+            std::thread::sleep(Duration::from_millis(20));
+            cancel.store(true, Ordering::Relaxed);
+            assert!(waiting.join().expect("no panic"));
+        });
+    }
+
+    /// A batch cancelled before it starts traces nothing, counts its passes as started (so no
+    /// pass number is used twice) and none as complete; the render goes on after it.
+    #[test]
+    fn a_cancelled_batch_keeps_the_film_and_moves_on() {
+        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
+        let mut settings = RenderSettings::merged(&[&scene.render]);
+        (settings.width, settings.height, settings.spp) = (32, 24, 10);
+        let mut r = Renderer::new(scene, settings).expect("settings");
+        assert_eq!(
+            r.run_passes(&AtomicBool::new(false), 2),
+            PassOutcome::Complete
+        );
+        let before = r.film().mean_rgb_f32();
+        assert_eq!(
+            r.run_passes(&AtomicBool::new(true), 4),
+            PassOutcome::Cancelled
+        );
+        assert_eq!((r.stats().passes, r.stats().complete_passes), (6, 2));
+        assert_eq!(r.film().mean_rgb_f32(), before);
+        assert_eq!(
+            r.run_passes(&AtomicBool::new(false), 3),
+            PassOutcome::Complete
+        );
+        assert_eq!((r.stats().passes, r.stats().complete_passes), (9, 5));
+        assert!((0..r.film().pixels()).all(|i| r.film().count(i) == 5));
     }
 
     /// The summary says when a render's joins pick from windows (passes whose kept ends exceed

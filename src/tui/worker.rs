@@ -359,13 +359,16 @@ impl Worker {
         }
     }
 
-    /// One pass, then a snapshot if one is due.
+    /// One batch of passes, then a snapshot if one is due.
     fn step(&mut self) {
         let Some(job) = &mut self.job else { return };
         if job.status != JobStatus::Running {
             return;
         }
-        if job.renderer.run_pass(&self.cancel) == PassOutcome::Cancelled {
+        // About a frame's worth of passes: the threads meet once a batch, and the preview
+        // could not show more often anyway.
+        let n = job.renderer.batch_within(self.min_interval.as_secs_f64());
+        if job.renderer.run_passes(&self.cancel, n) == PassOutcome::Cancelled {
             return;
         }
         self.update_status();
