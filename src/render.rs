@@ -101,7 +101,9 @@ pub struct Renderer {
     /// pass's rows were: a pass's light paths depend only on the seed and the pass, so tracing
     /// them a pass early changes no bit of the image, and the tracer's few long chunks no longer
     /// leave a core idle before the rows start.
-    ahead: Vec<(u32, PassSplats)>,
+    ahead: Option<(u32, PassSplats)>,
+    /// The most passes' light paths alive at once in any batch so far (for the tests).
+    most_light_alive: usize,
 }
 
 /// A rayon pool with `threads` workers (0 = one per core).
@@ -144,7 +146,8 @@ impl Renderer {
             stats: RenderStats::default(),
             error: None,
             map: None,
-            ahead: Vec::new(),
+            ahead: None,
+            most_light_alive: 0,
         })
     }
 
@@ -237,9 +240,9 @@ impl Renderer {
     }
 
     /// Up to `max` passes in one sweep over the rows ([`Renderer::batch_len`] says how many): each
-    /// row takes its samples of every pass of the batch in turn, so the threads wait for each
-    /// other once a batch instead of once a pass. Each sample is the one its pass alone would
-    /// take, added to its pixel in the same order, so the image is the same bit for bit.
+    /// band of rows takes its samples of every pass of the batch in turn, so the threads wait
+    /// for each other once a batch instead of once a pass. Each sample is the one its pass alone
+    /// would take, added to its pixel in the same order, so the image is the same bit for bit.
     /// Complete only if every pass of the batch covered every pixel.
     pub fn run_passes(&mut self, cancel: &AtomicBool, max: u32) -> PassOutcome {
         let started = Instant::now();
@@ -251,89 +254,54 @@ impl Renderer {
         }
         let n = self.batch_len(max);
         self.stats.passes += n;
-        let map = self.map.as_ref();
         let scene = &*self.scene;
         let settings = &self.settings;
         let threads = self.pool.current_num_threads() as u32;
         // Enough bands that both cores stay busy to the end of the batch, few enough that the
         // per-task overhead is nothing next to a row of paths. A thread finishing its last band
-        // early idles until the batch ends (measured with one pass a batch: 7-row bands at 320x240 (height / 16 per thread) cost
-        // path 1.3% and naive 0.4% against the 1-row bands of height / 64 per thread (2 threads,
-        // medians of 5 alternating runs; 1 -> 2 threads went 1.89x -> 1.90x for naive)).
+        // early idles until the batch ends (measured with one pass a batch: 7-row bands at
+        // 320x240 (height / 16 per thread) cost path 1.3% and naive 0.4% against the 1-row bands
+        // of height / 64 per thread (2 threads, medians of 5 alternating runs; 1 -> 2 threads
+        // went 1.89x -> 1.90x for naive)).
         let band_rows = (settings.height / (threads * 64)).clamp(1, 8);
         let counters = PassCounters::default();
         let tracer = self.caustics.as_ref();
-        let mut ahead = std::mem::take(&mut self.ahead);
-        let splats: Vec<PassSplats> = (first..first + n)
-            .map(|pass| match ahead.iter().position(|(p, _)| *p == pass) {
-                Some(i) => ahead.remove(i).1,
-                None => match tracer {
-                    Some(t) if !cancel.load(Ordering::Relaxed) => self
-                        .pool
-                        .install(|| t.trace_pass(scene, settings.seed, pass)),
-                    _ => PassSplats::default(),
-                },
-            })
-            .collect();
-        // Traced ahead for passes before this batch's: a cancelled batch's, never to be used.
-        ahead.retain(|(p, _)| *p >= first + n);
-        // The next batch's light paths (as many passes as this one takes, those not traced
-        // yet) are traced beside this batch's rows (each core takes rows when its light-path
-        // chunk is done), unless the render stops after this batch by its sample count. Two
-        // batches' splats and ends are then alive at once, so only where they are small
-        // (`large_passes`: at most 1 MiB of ends a pass); large passes have enough chunks to
+        // The batch's first pass's light paths: traced during the batch before, or now.
+        let first_light = match (tracer, self.ahead.take()) {
+            (Some(_), Some((p, traced))) if p == first => Some(traced),
+            (Some(t), _) if !cancel.load(Ordering::Relaxed) => Some(
+                self.pool
+                    .install(|| t.trace_pass(scene, settings.seed, first)),
+            ),
+            _ => None,
+        };
+        // The pass after the batch, whose light paths are traced during its last pass, unless
+        // the render stops after this batch by its sample count. Not on large passes (at most
+        // 1 MiB of ends: two passes' would then be alive at once), which have enough chunks to
         // share between the cores evenly anyway.
         let left_after =
             (settings.spp.saturating_sub(self.stats.complete_passes)).saturating_sub(n);
-        let trace_next = tracer.filter(|t| !t.large_passes() && !cancel.load(Ordering::Relaxed));
-        let next_passes: Vec<u32> = match trace_next {
-            Some(_) => ((first + n)..(first + n + n.min(left_after)))
-                .filter(|p| ahead.iter().all(|(q, _)| q != p))
-                .collect(),
-            None => Vec::new(),
+        let after = tracer
+            .filter(|t| !t.large_passes() && left_after > 0)
+            .map(|_| first + n);
+        let light = BatchLight::new(tracer, scene, settings.seed, first, n, first_light, after);
+        let batch = Batch {
+            scene,
+            settings,
+            first,
+            map: self.map.as_ref(),
+            light: &light,
         };
-        let mut next = ahead;
-        for s in &splats {
-            self.stats.rays += s.rays;
-            self.stats.light_rays += s.rays;
-            self.stats.light_paths += s.paths;
-        }
-        let batch: Vec<PassRows> = (first..first + n)
-            .zip(&splats)
-            .map(|(pass, s)| PassRows {
-                scene,
-                settings,
-                pass,
-                map,
-                caustics: tracer.map(|t| s.pass(t)),
-            })
-            .collect();
         let film = &mut self.film;
-        self.pool.install(|| {
-            rayon::join(
-                || {
-                    if let Some(t) = trace_next {
-                        next.extend(
-                            next_passes
-                                .iter()
-                                .map(|&p| (p, t.trace_pass(scene, settings.seed, p))),
-                        );
-                    }
-                },
-                || {
-                    trace_rows(
-                        film,
-                        band_rows,
-                        &batch,
-                        &splats,
-                        cancel,
-                        &counters,
-                        threads as usize,
-                    )
-                },
-            )
-        });
-        self.ahead = next;
+        self.pool
+            .install(|| trace_rows(film, band_rows, &batch, cancel, &counters, threads as usize));
+        self.ahead = light.take_after();
+        self.most_light_alive = self
+            .most_light_alive
+            .max(light.most_alive.load(Ordering::Relaxed));
+        self.stats.rays += light.rays.load(Ordering::Relaxed);
+        self.stats.light_rays += light.rays.load(Ordering::Relaxed);
+        self.stats.light_paths += light.paths.load(Ordering::Relaxed);
         self.stats.samples += counters.samples.into_inner();
         self.stats.invalid += counters.invalid.into_inner();
         self.stats.rays += counters.rays.into_inner();
@@ -540,6 +508,156 @@ struct PassCounters {
     rows: AtomicU64,
 }
 
+/// What every band of a batch shares: the scene, the settings, the batch's first pass, the
+/// adaptive map (none before the pilot ends) and the passes' light paths.
+struct Batch<'a> {
+    scene: &'a Scene,
+    settings: &'a RenderSettings,
+    first: u32,
+    map: Option<&'a SampleMap>,
+    light: &'a BatchLight<'a>,
+}
+
+/// The light paths of a batch's passes (with a caustic tracer). Pass k's are traced by the
+/// thread that takes the middle band of pass k - 1 (pass 0's before the batch), once pass
+/// k - 2's last band is done and its light paths dropped: at most two passes' splats and ends
+/// are alive at once, as when passes ran one at a time with the next one's traced beside them.
+/// A pass's light paths depend only on the seed and the pass, so where and when they are traced
+/// changes no bit of the image.
+struct BatchLight<'a> {
+    tracer: Option<&'a CausticTracer>,
+    scene: &'a Scene,
+    seed: u64,
+    first: u32,
+    /// Pass k's light paths, from when they are traced until its last band is done.
+    slots: Vec<Mutex<Option<Arc<PassSplats>>>>,
+    /// Bands of pass k done.
+    bands_done: Vec<AtomicUsize>,
+    /// The pass after the batch, to trace during its last pass, and its light paths.
+    after: Option<u32>,
+    traced_after: Mutex<Option<PassSplats>>,
+    /// What the passes' light paths traced, for the render's stats (the pass after the batch's
+    /// count when its own batch takes them).
+    rays: AtomicU64,
+    paths: AtomicU64,
+    /// The light paths of a pass without a tracer.
+    none: Arc<PassSplats>,
+    /// The most passes' light paths alive at once, seen as each was traced (for the tests).
+    most_alive: AtomicUsize,
+}
+
+impl<'a> BatchLight<'a> {
+    fn new(
+        tracer: Option<&'a CausticTracer>,
+        scene: &'a Scene,
+        seed: u64,
+        first: u32,
+        n: u32,
+        first_light: Option<PassSplats>,
+        after: Option<u32>,
+    ) -> Self {
+        let light = BatchLight {
+            tracer,
+            scene,
+            seed,
+            first,
+            slots: (0..n).map(|_| Mutex::new(None)).collect(),
+            bands_done: (0..n).map(|_| AtomicUsize::new(0)).collect(),
+            after,
+            traced_after: Mutex::new(None),
+            rays: AtomicU64::new(0),
+            paths: AtomicU64::new(0),
+            none: Arc::new(PassSplats::default()),
+            most_alive: AtomicUsize::new(0),
+        };
+        if let Some(traced) = first_light {
+            light.fill(0, traced);
+        }
+        light
+    }
+
+    fn fill(&self, k: usize, traced: PassSplats) {
+        self.rays.fetch_add(traced.rays, Ordering::Relaxed);
+        self.paths.fetch_add(traced.paths, Ordering::Relaxed);
+        *lock(&self.slots[k]) = Some(Arc::new(traced));
+        self.count_alive();
+    }
+
+    fn count_alive(&self) {
+        let alive = self.slots.iter().filter(|s| lock(s).is_some()).count()
+            + usize::from(lock(&self.traced_after).is_some());
+        self.most_alive.fetch_max(alive, Ordering::Relaxed);
+    }
+
+    /// On taking the middle band of pass k: trace the next pass's light paths (the batch's
+    /// pass k + 1, or the pass after the batch), once pass k - 1's are dropped.
+    fn trace_next(&self, k: usize, cancel: &AtomicBool) {
+        let Some(tracer) = self.tracer else { return };
+        let next = k + 1;
+        let pass = if next < self.slots.len() {
+            self.first + next as u32
+        } else if let Some(after) = self.after {
+            after
+        } else {
+            return;
+        };
+        if k > 0 {
+            while lock(&self.slots[k - 1]).is_some() {
+                if cancel.load(Ordering::Relaxed) {
+                    return;
+                }
+                std::thread::yield_now();
+            }
+        }
+        if cancel.load(Ordering::Relaxed) {
+            return;
+        }
+        let traced = tracer.trace_pass_here(self.scene, self.seed, pass);
+        if next < self.slots.len() {
+            self.fill(next, traced);
+        } else {
+            *lock(&self.traced_after) = Some(traced);
+            self.count_alive();
+        }
+    }
+
+    /// Pass k's light paths once traced (empty without a tracer); None if the render is
+    /// cancelled meanwhile.
+    fn wait_for(&self, k: usize, cancel: &AtomicBool) -> Option<Arc<PassSplats>> {
+        if self.tracer.is_none() {
+            return Some(self.none.clone());
+        }
+        loop {
+            if let Some(traced) = lock(&self.slots[k]).as_ref() {
+                return Some(traced.clone());
+            }
+            if cancel.load(Ordering::Relaxed) {
+                return None;
+            }
+            std::thread::yield_now();
+        }
+    }
+
+    /// A band of pass k is done: the pass's light paths go with its last one.
+    fn band_done(&self, k: usize, bands: usize) {
+        if self.bands_done[k].fetch_add(1, Ordering::AcqRel) + 1 == bands {
+            lock(&self.slots[k]).take();
+        }
+    }
+
+    /// The pass after the batch and its light paths, if traced.
+    fn take_after(&self) -> Option<(u32, PassSplats)> {
+        let traced = lock(&self.traced_after).take()?;
+        Some((self.after?, traced))
+    }
+}
+
+/// A lock whatever a panicking thread left: a panic fails the render anyway, and what these
+/// locks guard stays whole.
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// The rows of a batch of passes on the current pool's `threads` threads: every pixel's samples
 /// of each pass (`sample_row`) plus that pass's splats at that pixel, into the film. The
 /// threads take (pass, band of `band_rows` rows) items in pass order from one counter, so a
@@ -550,8 +668,7 @@ struct PassCounters {
 fn trace_rows(
     film: &mut Film,
     band_rows: u32,
-    batch: &[PassRows],
-    splats: &[PassSplats],
+    batch: &Batch,
     cancel: &AtomicBool,
     counters: &PassCounters,
     threads: usize,
@@ -561,7 +678,8 @@ fn trace_rows(
         .bands(band_rows)
         .map(|band| Mutex::new((band, 0)))
         .collect();
-    let items = bands.len() * batch.len();
+    let passes = batch.light.slots.len();
+    let items = bands.len() * passes;
     let next = AtomicUsize::new(0);
     let work = || {
         let mut tally = PassTally::default();
@@ -571,16 +689,31 @@ fn trace_rows(
                 break;
             }
             let (k, b) = (item / bands.len(), item % bands.len());
+            if b == bands.len() / 2 {
+                batch.light.trace_next(k, cancel);
+            }
+            let Some(splats) = batch.light.wait_for(k, cancel) else {
+                break;
+            };
             let Some(mut band) = band_turn(&bands[b], k, cancel) else {
                 break;
+            };
+            let pass_rows = PassRows {
+                scene: batch.scene,
+                settings: batch.settings,
+                pass: batch.first + k as u32,
+                map: batch.map,
+                caustics: batch.light.tracer.map(|t| splats.pass(t)),
             };
             let film_rows = &mut band.0;
             for row in 0..film_rows.rows() {
                 trace_row(
-                    &batch[k], &splats[k], film_rows, row, scratch, values, &mut tally,
+                    &pass_rows, &splats, film_rows, row, scratch, values, &mut tally,
                 );
             }
             band.1 = k + 1;
+            drop(band);
+            batch.light.band_done(k, bands.len());
         });
         tally.add_to(counters);
     };
@@ -596,8 +729,7 @@ fn band_turn<'a, T>(
     cancel: &AtomicBool,
 ) -> Option<std::sync::MutexGuard<'a, (T, usize)>> {
     loop {
-        // A panicking thread has already failed the render; its band's state is still whole.
-        let guard = band.lock().unwrap_or_else(|e| e.into_inner());
+        let guard = lock(band);
         if guard.1 == k {
             return Some(guard);
         }
@@ -804,13 +936,10 @@ mod tests {
             // 16 on are adaptive, which the light paths do not depend on).
             let expect_ahead = pass + 1 < 20;
             assert_eq!(
-                ahead.ahead.iter().map(|a| a.0).collect::<Vec<_>>(),
-                expect_ahead
-                    .then_some(pass + 1)
-                    .into_iter()
-                    .collect::<Vec<_>>()
+                ahead.ahead.as_ref().map(|a| a.0),
+                expect_ahead.then_some(pass + 1)
             );
-            own.ahead.clear();
+            own.ahead = None;
             assert_eq!(own.run_pass(&cancel), PassOutcome::Complete);
         }
         assert_eq!(ahead.stats().light_paths, own.stats().light_paths);
@@ -842,11 +971,12 @@ mod tests {
             let before = batched.stats().passes;
             assert_eq!(batched.run_passes(&cancel, max), PassOutcome::Complete);
             lengths.push(batched.stats().passes - before);
-            if before == 5 {
-                // Passes 5-9 were traced beside passes 0-4: the three this batch left stay.
-                let ahead: Vec<u32> = batched.ahead.iter().map(|a| a.0).collect();
-                assert_eq!(ahead, [7, 8, 9]);
-            }
+            // The pass after the batch was traced during its last pass.
+            let after = batched.stats().passes;
+            assert_eq!(
+                batched.ahead.as_ref().map(|a| a.0),
+                (after < 27).then_some(after)
+            );
         }
         // 0-15 pilot passes, the map built at 16, then to the sample count.
         assert_eq!(lengths, [5, 2, 7, 2, 2, 7, 2]);
@@ -870,6 +1000,30 @@ mod tests {
             assert_eq!(a.variance_of_mean(i), b.variance_of_mean(i));
             assert_eq!(a.half_buffer_variance(i), b.half_buffer_variance(i));
         }
+    }
+
+    /// However many passes a batch takes, at most two passes' light paths are alive at once
+    /// (the memory account counts two): on one band per pass too, where the next pass's are
+    /// traced as soon as its first band is taken, while the other thread may still hold the
+    /// band of the pass before.
+    #[test]
+    fn a_batch_keeps_two_passes_light_paths_at_most() {
+        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
+        let mut settings = RenderSettings::merged(&[&scene.render]);
+        (settings.width, settings.height, settings.spp) = (64, 1, 200);
+        settings.threads = 2;
+        let cancel = AtomicBool::new(false);
+        let mut r = Renderer::new(scene.clone(), settings.clone()).expect("settings");
+        while !r.done() {
+            r.run_passes(&cancel, MAX_BATCH);
+        }
+        assert_eq!(r.most_light_alive, 2);
+        (settings.width, settings.height, settings.spp) = (64, 48, 40);
+        let mut r = Renderer::new(scene, settings).expect("settings");
+        while !r.done() {
+            r.run_passes(&cancel, MAX_BATCH);
+        }
+        assert_eq!(r.most_light_alive, 2);
     }
 
     /// The batch length: at most [`MAX_BATCH`], what the sample count leaves, up to the pass

@@ -630,14 +630,31 @@ impl CausticTracer {
         let chunks = self.light_paths.div_ceil(CHUNK);
         let parts: Vec<PassSplats> = (0..chunks)
             .into_par_iter()
-            .map(|c| match ShadingCode::detect() {
-                // SAFETY: `ShadingCode::detect` found every feature the copy is compiled for.
-                #[cfg(target_arch = "x86_64")]
-                ShadingCode::V3 => unsafe { self.trace_chunk_v3(scene, seed, pass, c) },
-                _ => self.trace_chunk(scene, seed, pass, c),
-            })
+            .map(|c| self.chunk(scene, seed, pass, c))
             .collect();
         merge(parts)
+    }
+
+    /// [`CausticTracer::trace_pass`] on the calling thread alone (the same splats and ends):
+    /// for a thread that traces a pass's light paths between its bands of rows, while the
+    /// others, busy with theirs, would take none of its chunks anyway.
+    pub fn trace_pass_here(&self, scene: &Scene, seed: u64, pass: u32) -> PassSplats {
+        let chunks = self.light_paths.div_ceil(CHUNK);
+        merge(
+            (0..chunks)
+                .map(|c| self.chunk(scene, seed, pass, c))
+                .collect(),
+        )
+    }
+
+    #[inline]
+    fn chunk(&self, scene: &Scene, seed: u64, pass: u32, c: u64) -> PassSplats {
+        match ShadingCode::detect() {
+            // SAFETY: `ShadingCode::detect` found every feature the copy is compiled for.
+            #[cfg(target_arch = "x86_64")]
+            ShadingCode::V3 => unsafe { self.trace_chunk_v3(scene, seed, pass, c) },
+            _ => self.trace_chunk(scene, seed, pass, c),
+        }
     }
 
     /// Chunk `c` of pass `pass`'s light paths.
