@@ -97,10 +97,10 @@ pub struct Renderer {
     caustics_note: String,
     /// Samples per pixel and pass once the pilot is over (`settings.adaptive`).
     map: Option<SampleMap>,
-    /// The light paths of the next pass (its number, its splats and ends), traced while this
-    /// pass's rows were: a pass's light paths depend only on the seed and the pass, so tracing
-    /// them a pass early changes no bit of the image, and the tracer's few long chunks no longer
-    /// leave a core idle before the rows start.
+    /// The light paths of the pass after the last batch (its number, its splats and ends),
+    /// traced while that batch's last pass ran: a pass's light paths depend only on the seed and
+    /// the pass, so tracing them a pass early changes no bit of the image, and the tracer's few
+    /// long chunks no longer leave a core idle before the rows start.
     ahead: Option<(u32, PassSplats)>,
     /// The most passes' light paths alive at once in any batch so far (for the tests).
     most_light_alive: usize,
@@ -330,8 +330,9 @@ impl Renderer {
     }
 
     /// How many of up to `max` passes the next batch takes: no more than the sample count
-    /// leaves; one where a pass's light paths are large (two batches' would be alive at once);
-    /// and none past the pass where the adaptive map is built from the film.
+    /// leaves; one where a pass's light paths are large (a batch keeps two passes' alive, a
+    /// large pass alone keeps one); and none past the pass where the adaptive map is built from
+    /// the film.
     fn batch_len(&self, max: u32) -> u32 {
         let mut n = max.clamp(1, MAX_BATCH).min(self.passes_left());
         if self.caustics.as_ref().is_some_and(|t| t.large_passes()) {
