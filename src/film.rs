@@ -217,31 +217,11 @@ impl Film {
     /// Split the film into bands of `rows` rows for parallel accumulation (no locks: each task
     /// owns its rows).
     pub fn par_bands(&mut self, rows: u32) -> impl IndexedParallelIterator<Item = FilmRows<'_>> {
-        let width = self.width;
-        let chunk = (rows * width) as usize;
-        self.mean
-            .px
-            .par_chunks(chunk)
-            .zip(self.m2.par_chunks_mut(chunk))
-            .zip(self.count.par_chunks_mut(chunk))
-            .zip(self.odd_mean.par_chunks_mut(chunk))
-            .zip(self.odd_count.par_chunks_mut(chunk))
-            .enumerate()
-            .map(
-                move |(band, ((((mean, m2), count), odd_mean), odd_count))| FilmRows {
-                    first_row: band as u32 * rows,
-                    width,
-                    mean,
-                    m2,
-                    count,
-                    odd_mean,
-                    odd_count,
-                },
-            )
+        self.bands(rows).collect::<Vec<_>>().into_par_iter()
     }
 
-    /// The film in bands of `rows` rows, in order: [`Film::par_bands`] for a caller that hands
-    /// them out itself.
+    /// The film in bands of `rows` rows, in order, for a caller that hands them out itself (the
+    /// render's threads take them in turn).
     pub fn bands(&mut self, rows: u32) -> impl ExactSizeIterator<Item = FilmRows<'_>> {
         let width = self.width;
         let chunk = (rows * width) as usize;
