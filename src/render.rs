@@ -492,7 +492,8 @@ pub struct RowScratch {
     pub plan: Vec<(u32, u64)>,
 }
 
-/// Most passes one batch takes ([`Renderer::run_passes`]).
+/// Most passes one batch takes ([`Renderer::run_passes`]): enough that a barrier every batch
+/// costs nothing at 320x240, few enough that a caller's progress report is never far behind.
 pub const MAX_BATCH: u32 = 16;
 
 /// About how many camera samples [`Renderer::render`]'s batches take: at 320x240, 13 passes,
@@ -520,9 +521,10 @@ struct Batch<'a> {
 }
 
 /// The light paths of a batch's passes (with a caustic tracer). Pass k's are traced by the
-/// thread that takes the middle band of pass k - 1 (pass 0's before the batch), once pass
-/// k - 2's last band is done and its light paths dropped: at most two passes' splats and ends
-/// are alive at once, as when passes ran one at a time with the next one's traced beside them.
+/// thread that takes the middle band of pass k - 1 (the batch's first pass's during the batch
+/// before, or before this one starts), once pass k - 2's last band is done and its light paths
+/// dropped: at most two passes' splats and ends are alive at once, as when passes ran one at a
+/// time with the next one's traced beside them.
 /// A pass's light paths depend only on the seed and the pass, so where and when they are traced
 /// changes no bit of the image.
 struct BatchLight<'a> {
