@@ -594,7 +594,7 @@ impl<'a> BatchLight<'a> {
 
     /// On taking the middle band of pass k: trace the next pass's light paths (the batch's
     /// pass k + 1, or the pass after the batch), once pass k - 1's are dropped.
-    fn trace_next(&self, k: usize, cancel: &AtomicBool) {
+    fn trace_next(&self, k: usize, stop: &dyn Fn() -> bool) {
         let Some(tracer) = self.tracer else { return };
         let next = k + 1;
         let pass = if next < self.slots.len() {
@@ -606,13 +606,13 @@ impl<'a> BatchLight<'a> {
         };
         if k > 0 {
             while lock(&self.slots[k - 1]).is_some() {
-                if cancel.load(Ordering::Relaxed) {
+                if stop() {
                     return;
                 }
                 std::thread::yield_now();
             }
         }
-        if cancel.load(Ordering::Relaxed) {
+        if stop() {
             return;
         }
         let traced = tracer.trace_pass_here(self.scene, self.seed, pass);
@@ -624,9 +624,9 @@ impl<'a> BatchLight<'a> {
         }
     }
 
-    /// Pass k's light paths once traced (empty without a tracer); None if the render is
-    /// cancelled meanwhile.
-    fn wait_for(&self, k: usize, cancel: &AtomicBool) -> Option<Arc<PassSplats>> {
+    /// Pass k's light paths once traced (empty without a tracer); None if `stop` says so
+    /// meanwhile (the render is cancelled, or a thread panicked).
+    fn wait_for(&self, k: usize, stop: &dyn Fn() -> bool) -> Option<Arc<PassSplats>> {
         if self.tracer.is_none() {
             return Some(self.none.clone());
         }
@@ -634,7 +634,7 @@ impl<'a> BatchLight<'a> {
             if let Some(traced) = lock(&self.slots[k]).as_ref() {
                 return Some(traced.clone());
             }
-            if cancel.load(Ordering::Relaxed) {
+            if stop() {
                 return None;
             }
             std::thread::yield_now();
@@ -684,21 +684,27 @@ fn trace_rows(
     let passes = batch.light.slots.len();
     let items = bands.len() * passes;
     let next = AtomicUsize::new(0);
+    // A thread that panics stops the others waiting for its items (the panic then fails the
+    // render, as it did when each pass was a plain parallel loop) instead of leaving them
+    // waiting for ever.
+    let panicked = AtomicBool::new(false);
+    let stop = || cancel.load(Ordering::Relaxed) || panicked.load(Ordering::Relaxed);
     let work = || {
+        let _flag = FlagOnPanic(&panicked);
         let mut tally = PassTally::default();
         ROW_BUFFERS.with_borrow_mut(|(scratch, values)| loop {
             let item = next.fetch_add(1, Ordering::Relaxed);
-            if item >= items || cancel.load(Ordering::Relaxed) {
+            if item >= items || stop() {
                 break;
             }
             let (k, b) = (item / bands.len(), item % bands.len());
             if b == bands.len() / 2 {
-                batch.light.trace_next(k, cancel);
+                batch.light.trace_next(k, &stop);
             }
-            let Some(splats) = batch.light.wait_for(k, cancel) else {
+            let Some(splats) = batch.light.wait_for(k, &stop) else {
                 break;
             };
-            let Some(mut band) = band_turn(&bands[b], k, cancel) else {
+            let Some(mut band) = band_turn(&bands[b], k, &stop) else {
                 break;
             };
             let pass_rows = PassRows {
@@ -723,13 +729,24 @@ fn trace_rows(
     (0..threads.max(1)).into_par_iter().for_each(|_| work());
 }
 
+/// Sets its flag if its thread unwinds past it.
+struct FlagOnPanic<'a>(&'a AtomicBool);
+
+impl Drop for FlagOnPanic<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
 /// The band `band` once its turn for the batch's pass `k` has come (the thread holding its
-/// pass k - 1 took its item before this one, so it is tracing it or about to); None if the
-/// render is cancelled meanwhile.
+/// pass k - 1 took its item before this one, so it is tracing it or about to); None if `stop`
+/// says so meanwhile (the render is cancelled, or a thread panicked).
 fn band_turn<'a, T>(
     band: &'a Mutex<(T, usize)>,
     k: usize,
-    cancel: &AtomicBool,
+    stop: &dyn Fn() -> bool,
 ) -> Option<std::sync::MutexGuard<'a, (T, usize)>> {
     loop {
         let guard = lock(band);
@@ -737,7 +754,7 @@ fn band_turn<'a, T>(
             return Some(guard);
         }
         drop(guard);
-        if cancel.load(Ordering::Relaxed) {
+        if stop() {
             return None;
         }
         std::thread::yield_now();
@@ -1095,27 +1112,44 @@ mod tests {
     }
 
     /// A band goes to the threads in the order of its passes, whatever order they ask in; a
-    /// thread waiting for a turn that never comes gives up when the render is cancelled.
+    /// thread waiting for a turn that never comes gives up when the render is cancelled, or
+    /// when the thread holding the turn before it panics.
     #[test]
     fn a_band_takes_its_passes_in_order() {
         let band = Mutex::new((Vec::new(), 0));
         let cancel = AtomicBool::new(false);
+        let stop = || cancel.load(Ordering::Relaxed);
         std::thread::scope(|s| {
             for k in [3, 1, 4, 0, 2] {
-                let (band, cancel) = (&band, &cancel);
+                let (band, stop) = (&band, &stop);
                 s.spawn(move || {
-                    let mut turn = band_turn(band, k, cancel).expect("not cancelled");
+                    let mut turn = band_turn(band, k, stop).expect("not cancelled");
                     turn.0.push(k);
                     turn.1 = k + 1;
                 });
                 std::thread::sleep(Duration::from_millis(5));
             }
         });
-        assert_eq!(band.lock().expect("not poisoned").0, [0, 1, 2, 3, 4]);
+        assert_eq!(lock(&band).0, [0, 1, 2, 3, 4]);
         std::thread::scope(|s| {
-            let waiting = s.spawn(|| band_turn(&band, 7, &cancel).is_none());
+            let waiting = s.spawn(|| band_turn(&band, 7, &stop).is_none());
             std::thread::sleep(Duration::from_millis(20));
             cancel.store(true, Ordering::Relaxed);
+            assert!(waiting.join().expect("no panic"));
+        });
+        let band = Mutex::new(((), 0));
+        let panicked = AtomicBool::new(false);
+        let stop = || panicked.load(Ordering::Relaxed);
+        std::thread::scope(|s| {
+            let holder = s.spawn(|| {
+                let _flag = FlagOnPanic(&panicked);
+                let _turn = band_turn(&band, 0, &stop);
+                std::thread::sleep(Duration::from_millis(20));
+                panic!("a bug in the tracer");
+            });
+            std::thread::sleep(Duration::from_millis(5));
+            let waiting = s.spawn(|| band_turn(&band, 1, &stop).is_none());
+            assert!(holder.join().is_err());
             assert!(waiting.join().expect("no panic"));
         });
     }
