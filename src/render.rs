@@ -264,7 +264,6 @@ impl Renderer {
         // of height / 64 per thread (2 threads, medians of 5 alternating runs; 1 -> 2 threads
         // went 1.89x -> 1.90x for naive)).
         let band_rows = (settings.height / (threads * 64)).clamp(1, 8);
-        let counters = PassCounters::default();
         let tracer = self.caustics.as_ref();
         // The batch's first pass's light paths: traced during the batch before, or now.
         let first_light = match (tracer, self.ahead.take()) {
@@ -276,7 +275,7 @@ impl Renderer {
             _ => None,
         };
         // The pass after the batch, whose light paths are traced during its last pass, unless
-        // the render stops after this batch by its sample count. Not on large passes (at most
+        // the render stops after this batch by its sample count. Not on large passes (over
         // 1 MiB of ends: two passes' would then be alive at once), which have enough chunks to
         // share between the cores evenly anyway.
         let left_after =
@@ -293,8 +292,9 @@ impl Renderer {
             light: &light,
         };
         let film = &mut self.film;
-        self.pool
-            .install(|| trace_rows(film, band_rows, &batch, cancel, &counters, threads as usize));
+        let tally = self
+            .pool
+            .install(|| trace_rows(film, band_rows, &batch, cancel, threads as usize));
         self.ahead = light.take_after();
         self.most_light_alive = self
             .most_light_alive
@@ -302,10 +302,10 @@ impl Renderer {
         self.stats.rays += light.rays.load(Ordering::Relaxed);
         self.stats.light_rays += light.rays.load(Ordering::Relaxed);
         self.stats.light_paths += light.paths.load(Ordering::Relaxed);
-        self.stats.samples += counters.samples.into_inner();
-        self.stats.invalid += counters.invalid.into_inner();
-        self.stats.rays += counters.rays.into_inner();
-        let outcome = if counters.rows.into_inner() == settings.height as u64 * n as u64 {
+        self.stats.samples += tally.samples;
+        self.stats.invalid += tally.invalid;
+        self.stats.rays += tally.rays;
+        let outcome = if tally.rows == settings.height as u64 * n as u64 {
             self.stats.complete_passes += n;
             if settings.target_error.is_some() {
                 // On the render pool, and counted in the render time: the check is part of it.
@@ -500,16 +500,6 @@ pub const MAX_BATCH: u32 = 16;
 /// a third of a second.
 const BATCH_SAMPLES: u64 = 1 << 20;
 
-/// What the threads of one pass count, added to the render's stats at its end.
-#[derive(Default)]
-struct PassCounters {
-    invalid: AtomicU64,
-    samples: AtomicU64,
-    rays: AtomicU64,
-    /// Rows traced to the end (fewer than the height when cancelled).
-    rows: AtomicU64,
-}
-
 /// What every band of a batch shares: the scene, the settings, the batch's first pass, the
 /// adaptive map (none before the pilot ends) and the passes' light paths.
 struct Batch<'a> {
@@ -604,13 +594,9 @@ impl<'a> BatchLight<'a> {
         } else {
             return;
         };
-        if k > 0 {
-            while lock(&self.slots[k - 1]).is_some() {
-                if stop() {
-                    return;
-                }
-                std::thread::yield_now();
-            }
+        if k > 0 && wait_until(|| lock(&self.slots[k - 1]).is_none().then_some(()), stop).is_none()
+        {
+            return;
         }
         if stop() {
             return;
@@ -630,15 +616,7 @@ impl<'a> BatchLight<'a> {
         if self.tracer.is_none() {
             return Some(self.none.clone());
         }
-        loop {
-            if let Some(traced) = lock(&self.slots[k]).as_ref() {
-                return Some(traced.clone());
-            }
-            if stop() {
-                return None;
-            }
-            std::thread::yield_now();
-        }
+        wait_until(|| lock(&self.slots[k]).clone(), stop)
     }
 
     /// A band of pass k is done: the pass's light paths go with its last one.
@@ -673,9 +651,8 @@ fn trace_rows(
     band_rows: u32,
     batch: &Batch,
     cancel: &AtomicBool,
-    counters: &PassCounters,
     threads: usize,
-) {
+) -> PassTally {
     // Each band with the batch's index of the pass it takes next.
     let bands: Vec<Mutex<(FilmRows, usize)>> = film
         .bands(band_rows)
@@ -724,9 +701,12 @@ fn trace_rows(
             drop(band);
             batch.light.band_done(k, bands.len());
         });
-        tally.add_to(counters);
+        tally
     };
-    (0..threads.max(1)).into_par_iter().for_each(|_| work());
+    (0..threads.max(1))
+        .into_par_iter()
+        .map(|_| work())
+        .reduce(PassTally::default, PassTally::sum)
 }
 
 /// Sets its flag if its thread unwinds past it.
@@ -748,12 +728,23 @@ fn band_turn<'a, T>(
     k: usize,
     stop: &dyn Fn() -> bool,
 ) -> Option<std::sync::MutexGuard<'a, (T, usize)>> {
+    wait_until(
+        || {
+            let guard = lock(band);
+            (guard.1 == k).then_some(guard)
+        },
+        stop,
+    )
+}
+
+/// `ready`'s value once it has one, yielding the core between tries (the waits of a batch are
+/// short and rare: a band or a pass's light paths another thread is about to finish); None if
+/// `stop` says so first (the render is cancelled, or a thread panicked).
+fn wait_until<R>(mut ready: impl FnMut() -> Option<R>, stop: &dyn Fn() -> bool) -> Option<R> {
     loop {
-        let guard = lock(band);
-        if guard.1 == k {
-            return Some(guard);
+        if let Some(r) = ready() {
+            return Some(r);
         }
-        drop(guard);
         if stop() {
             return None;
         }
@@ -761,21 +752,27 @@ fn band_turn<'a, T>(
     }
 }
 
-/// What one thread counts over a batch, added to the pass counters once at its end.
+/// What the threads of a batch count, summed over them at its end for the render's stats.
 #[derive(Default)]
 struct PassTally {
-    bad: u64,
-    done: u64,
-    traced: u64,
+    /// Camera samples computed (valid or not).
+    samples: u64,
+    /// NaN or infinite samples dropped before reaching the film.
+    invalid: u64,
+    /// Closest-hit queries the samples traced.
+    rays: u64,
+    /// (pass, row) pairs traced to the end.
     rows: u64,
 }
 
 impl PassTally {
-    fn add_to(&self, counters: &PassCounters) {
-        counters.rows.fetch_add(self.rows, Ordering::Relaxed);
-        counters.invalid.fetch_add(self.bad, Ordering::Relaxed);
-        counters.samples.fetch_add(self.done, Ordering::Relaxed);
-        counters.rays.fetch_add(self.traced, Ordering::Relaxed);
+    fn sum(self, other: PassTally) -> PassTally {
+        PassTally {
+            samples: self.samples + other.samples,
+            invalid: self.invalid + other.invalid,
+            rays: self.rays + other.rays,
+            rows: self.rows + other.rows,
+        }
     }
 }
 
@@ -806,12 +803,12 @@ fn trace_row(
             }
         }
         let v = v + splat.1;
-        tally.done += 1;
-        tally.traced += r as u64;
+        tally.samples += 1;
+        tally.rays += r as u64;
         if v.is_finite() {
             band.add(x, row, pass_rows.pass, v);
         } else {
-            tally.bad += 1;
+            tally.invalid += 1;
         }
     }
     tally.rows += 1;
