@@ -936,14 +936,20 @@ mod tests {
         map
     }
 
+    /// The built-in cornell scene and its settings at `width` x `height`, `spp` passes.
+    fn cornell_at(width: u32, height: u32, spp: u32) -> (Arc<Scene>, RenderSettings) {
+        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
+        let mut settings = RenderSettings::merged(&[&scene.render]);
+        (settings.width, settings.height, settings.spp) = (width, height, spp);
+        (scene, settings)
+    }
+
     /// Tracing a pass's light paths beside the previous pass's rows changes no bit: the same
     /// render with every pass's light paths traced at its own start (the next pass's dropped)
     /// gives the same film, and the traced-ahead passes are the ones used.
     #[test]
     fn light_paths_traced_a_pass_ahead_give_the_same_image() {
-        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
-        let mut settings = RenderSettings::merged(&[&scene.render]);
-        (settings.width, settings.height, settings.spp) = (64, 48, 20);
+        let (scene, settings) = cornell_at(64, 48, 20);
         let cancel = AtomicBool::new(false);
         let mut ahead = Renderer::new(scene.clone(), settings.clone()).expect("settings");
         let mut own = Renderer::new(scene, settings).expect("settings");
@@ -971,9 +977,7 @@ mod tests {
     /// pass and at the sample count.
     #[test]
     fn batches_of_passes_give_the_image_of_single_passes() {
-        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
-        let mut settings = RenderSettings::merged(&[&scene.render]);
-        (settings.width, settings.height, settings.spp) = (64, 48, 27);
+        let (scene, mut settings) = cornell_at(64, 48, 27);
         assert!(settings.adaptive);
         settings.threads = 2;
         let cancel = AtomicBool::new(false);
@@ -1025,9 +1029,7 @@ mod tests {
     /// band of the pass before.
     #[test]
     fn a_batch_keeps_two_passes_light_paths_at_most() {
-        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
-        let mut settings = RenderSettings::merged(&[&scene.render]);
-        (settings.width, settings.height, settings.spp) = (64, 1, 200);
+        let (scene, mut settings) = cornell_at(64, 1, 200);
         settings.threads = 2;
         let cancel = AtomicBool::new(false);
         let mut r = Renderer::new(scene.clone(), settings.clone()).expect("settings");
@@ -1047,9 +1049,7 @@ mod tests {
     /// that builds the adaptive map; one pass where a pass's light paths are large.
     #[test]
     fn batches_end_at_the_sample_count_and_the_adaptive_map() {
-        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
-        let mut settings = RenderSettings::merged(&[&scene.render]);
-        (settings.width, settings.height, settings.spp) = (32, 24, 100);
+        let (scene, mut settings) = cornell_at(32, 24, 100);
         let cancel = AtomicBool::new(false);
         let mut r = Renderer::new(scene.clone(), settings.clone()).expect("settings");
         assert_eq!(r.batch_len(1000), MAX_BATCH);
@@ -1082,9 +1082,7 @@ mod tests {
     /// time stays within that.
     #[test]
     fn the_default_batch_follows_the_image_size_and_the_target_error() {
-        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
-        let mut settings = RenderSettings::merged(&[&scene.render]);
-        (settings.width, settings.height) = (320, 240);
+        let (scene, mut settings) = cornell_at(320, 240, 256);
         let r = Renderer::new(scene.clone(), settings.clone()).expect("settings");
         assert_eq!(r.default_batch(), 13);
         (settings.width, settings.height) = (1920, 1080);
@@ -1155,9 +1153,7 @@ mod tests {
     /// pass number is used twice) and none as complete; the render goes on after it.
     #[test]
     fn a_cancelled_batch_keeps_the_film_and_moves_on() {
-        let scene = Arc::new(crate::scene::load("cornell").expect("built-in scene"));
-        let mut settings = RenderSettings::merged(&[&scene.render]);
-        (settings.width, settings.height, settings.spp) = (32, 24, 10);
+        let (scene, settings) = cornell_at(32, 24, 10);
         let mut r = Renderer::new(scene, settings).expect("settings");
         assert_eq!(
             r.run_passes(&AtomicBool::new(false), 2),
