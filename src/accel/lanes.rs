@@ -7,7 +7,7 @@
 //! The batched test across rays has its x86 copies written with intrinsics (`x86`), from which
 //! the compiler's own vectorisation kept each ray's closest hit in memory.
 
-use crate::math::Ray;
+use crate::math::{DVec3, Ray};
 use crate::scene::Primitive;
 
 #[cfg(target_arch = "x86_64")]
@@ -49,76 +49,95 @@ struct FlatSphere {
     prim: u64,
 }
 
-/// Rays in structure-of-arrays form for [`SphereLanes::closest_batch`], padded to whole groups
-/// of [`LANES`]; the closest hits are written back beside them. Reused from batch to batch, so a
-/// render allocates it once per band of rows.
+/// Rays in structure-of-arrays form for [`SphereLanes::closest_batch`], in groups of [`LANES`];
+/// the closest hits are written back beside them. Reused from batch to batch, so a render
+/// allocates it once per band of rows.
 #[derive(Clone, Debug, Default)]
 pub struct RayBatch {
-    /// The rays as pushed, each with how far it looks; spread into the columns below by
-    /// `prepare`. One vector to grow per push instead of seven: the pushes were 3.7% of a
-    /// cornell render's instructions, each column's length and capacity checked and stored.
-    rays: Vec<(Ray, f64)>,
-    ox: Vec<f64>,
-    oy: Vec<f64>,
-    oz: Vec<f64>,
-    dx: Vec<f64>,
-    dy: Vec<f64>,
-    dz: Vec<f64>,
-    /// Distance to the closest hit of each ray (t_max when none).
+    len: usize,
+    /// The rays, [`LANES`] a group, each component in its own column. A push writes each
+    /// number straight into its column, read one at a time from the ray: the rays used to be
+    /// kept whole and spread into columns before each test, and copying a ray whole read it back
+    /// with wide loads from narrower stores still in flight, which stalled (~5% of a cornell
+    /// profile on the pushes). Groups past the used ones are spare capacity; lanes past `len`
+    /// in the last used group hold stale rays, tested but never read.
+    groups: Vec<RayGroup>,
+    /// Distance to the closest hit of each ray (t_max when none); padded to whole groups.
     pub t: Vec<f64>,
-    /// Primitive of the closest hit (u32::MAX when none).
+    /// Primitive of the closest hit (u32::MAX when none); padded to whole groups.
     pub prim: Vec<u32>,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct RayGroup {
+    ox: [f64; LANES],
+    oy: [f64; LANES],
+    oz: [f64; LANES],
+    dx: [f64; LANES],
+    dy: [f64; LANES],
+    dz: [f64; LANES],
+    t_max: [f64; LANES],
 }
 
 impl RayBatch {
     pub fn clear(&mut self) {
-        self.rays.clear();
+        self.len = 0;
     }
 
     /// Add `ray`, looking for hits in (0, t_max).
     #[inline]
     pub fn push(&mut self, ray: &Ray, t_max: f64) {
-        self.rays.push((*ray, t_max));
+        let (g, k) = (self.len / LANES, self.len % LANES);
+        if g == self.groups.len() {
+            self.groups.push(RayGroup::default());
+        }
+        let group = &mut self.groups[g];
+        group.ox[k] = ray.o.x;
+        group.oy[k] = ray.o.y;
+        group.oz[k] = ray.o.z;
+        group.dx[k] = ray.d.x;
+        group.dy[k] = ray.d.y;
+        group.dz[k] = ray.d.z;
+        group.t_max[k] = t_max;
+        self.len += 1;
     }
 
     pub fn len(&self) -> usize {
-        self.rays.len()
+        self.len
     }
 
     pub fn is_empty(&self) -> bool {
-        self.rays.is_empty()
+        self.len == 0
     }
 
     pub fn ray(&self, i: usize) -> Ray {
-        self.rays[i].0
+        assert!(i < self.len);
+        let (g, k) = (&self.groups[i / LANES], i % LANES);
+        Ray::new(
+            DVec3::new(g.ox[k], g.oy[k], g.oz[k]),
+            DVec3::new(g.dx[k], g.dy[k], g.dz[k]),
+        )
     }
 
     /// How far ray `i` looks.
     pub fn t_max(&self, i: usize) -> f64 {
-        self.rays[i].1
+        assert!(i < self.len);
+        self.groups[i / LANES].t_max[i % LANES]
     }
 
-    /// Pad the rays to a whole number of groups (the padding rays' answers are never read) and
-    /// size the outputs, every ray starting with no hit before its `t_max`.
+    /// The groups holding the rays (the last may be partly stale) and the outputs, as many
+    /// lanes as the groups once prepared.
+    fn split(&mut self) -> (&[RayGroup], &mut [f64], &mut [u32]) {
+        let used = self.len.div_ceil(LANES);
+        assert!(self.t.len() == used * LANES && self.prim.len() == used * LANES);
+        (&self.groups[..used], &mut self.t, &mut self.prim)
+    }
+
+    /// Size the outputs to whole groups (each test writes every lane of them).
     #[inline(always)]
     fn prepare(&mut self) {
-        let padded = self.rays.len().div_ceil(LANES) * LANES;
-        let rays = &self.rays;
-        // Column by column: clearing and zero-filling whole columns before overwriting them
-        // added a memset per column and batch (1% of a cornell render's instructions).
-        let column = |v: &mut Vec<f64>, get: fn(&(Ray, f64)) -> f64| {
-            v.clear();
-            v.extend(rays.iter().map(get));
-            v.resize(padded, 0.0);
-        };
-        column(&mut self.ox, |r| r.0.o.x);
-        column(&mut self.oy, |r| r.0.o.y);
-        column(&mut self.oz, |r| r.0.o.z);
-        column(&mut self.dx, |r| r.0.d.x);
-        column(&mut self.dy, |r| r.0.d.y);
-        column(&mut self.dz, |r| r.0.d.z);
-        column(&mut self.t, |r| r.1);
-        self.prim.clear();
+        let padded = self.len.div_ceil(LANES) * LANES;
+        self.t.resize(padded, 0.0);
         self.prim.resize(padded, u32::MAX);
     }
 }
@@ -298,19 +317,11 @@ impl SphereLanes {
     #[inline(always)]
     fn closest_batch_portable(&self, batch: &mut RayBatch) {
         batch.prepare();
-        let b = batch;
-        let groups =
-            b.ox.chunks_exact(LANES)
-                .zip(b.oy.chunks_exact(LANES))
-                .zip(b.oz.chunks_exact(LANES))
-                .zip(b.dx.chunks_exact(LANES))
-                .zip(b.dy.chunks_exact(LANES))
-                .zip(b.dz.chunks_exact(LANES))
-                .zip(b.t.chunks_exact_mut(LANES))
-                .zip(b.prim.chunks_exact_mut(LANES));
-        for (((((((ox, oy), oz), dx), dy), dz), t_out), prim_out) in groups {
-            let mut best = [0.0; LANES];
-            best.copy_from_slice(t_out);
+        let (groups, t, prim) = batch.split();
+        let outputs = t.chunks_exact_mut(LANES).zip(prim.chunks_exact_mut(LANES));
+        for (g, (t_out, prim_out)) in groups.iter().zip(outputs) {
+            let (ox, oy, oz, dx, dy, dz) = (&g.ox, &g.oy, &g.oz, &g.dx, &g.dy, &g.dz);
+            let mut best = g.t_max;
             let mut best_prim = [u64::MAX; LANES];
             for s in &self.flat {
                 let mut fx = [0.0; LANES];

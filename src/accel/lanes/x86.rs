@@ -12,36 +12,27 @@ use std::arch::x86_64::*;
 
 use super::{FlatSphere, RayBatch};
 
-/// The batch's length, checked to be whole groups of `w` in every column: what makes the
-/// loops' unchecked loads and stores safe.
-fn prepared_len(batch: &RayBatch, w: usize) -> usize {
-    let n = batch.t.len();
-    let columns = [
-        &batch.ox, &batch.oy, &batch.oz, &batch.dx, &batch.dy, &batch.dz,
-    ];
-    assert!(n.is_multiple_of(w) && columns.iter().all(|c| c.len() == n) && batch.prim.len() == n);
-    n
-}
-
-/// Eight rays a vector. `batch` is prepared (its columns padded to whole groups of eight).
+/// Eight rays a vector. `batch` is prepared (its outputs sized to whole groups).
 ///
 /// # Safety
 /// The CPU must have AVX-512F.
 #[target_feature(enable = "avx512f")]
 pub(super) unsafe fn closest_batch_avx512(flat: &[FlatSphere], batch: &mut RayBatch) {
-    const W: usize = 8;
-    let n = prepared_len(batch, W);
     let zero = _mm512_setzero_pd();
     let sign = _mm512_castpd_si512(_mm512_set1_pd(-0.0));
-    for g in (0..n).step_by(W) {
-        // SAFETY (each load and store): g + W <= n, the length of every column (`prepared_len`).
-        let ox = unsafe { _mm512_loadu_pd(batch.ox.as_ptr().add(g)) };
-        let oy = unsafe { _mm512_loadu_pd(batch.oy.as_ptr().add(g)) };
-        let oz = unsafe { _mm512_loadu_pd(batch.oz.as_ptr().add(g)) };
-        let dx = unsafe { _mm512_loadu_pd(batch.dx.as_ptr().add(g)) };
-        let dy = unsafe { _mm512_loadu_pd(batch.dy.as_ptr().add(g)) };
-        let dz = unsafe { _mm512_loadu_pd(batch.dz.as_ptr().add(g)) };
-        let mut best = unsafe { _mm512_loadu_pd(batch.t.as_ptr().add(g)) };
+    let (groups, t, prim) = batch.split();
+    for (g, (t, prim)) in groups
+        .iter()
+        .zip(t.chunks_exact_mut(8).zip(prim.chunks_exact_mut(8)))
+    {
+        // SAFETY (each load and store): every array and chunk here holds eight lanes.
+        let ox = unsafe { _mm512_loadu_pd(g.ox.as_ptr()) };
+        let oy = unsafe { _mm512_loadu_pd(g.oy.as_ptr()) };
+        let oz = unsafe { _mm512_loadu_pd(g.oz.as_ptr()) };
+        let dx = unsafe { _mm512_loadu_pd(g.dx.as_ptr()) };
+        let dy = unsafe { _mm512_loadu_pd(g.dy.as_ptr()) };
+        let dz = unsafe { _mm512_loadu_pd(g.dz.as_ptr()) };
+        let mut best = unsafe { _mm512_loadu_pd(g.t_max.as_ptr()) };
         let mut best_prim = _mm512_set1_epi64(-1);
         for s in flat {
             let r2 = _mm512_set1_pd(s.r2);
@@ -91,10 +82,10 @@ pub(super) unsafe fn closest_batch_avx512(flat: &[FlatSphere], batch: &mut RayBa
             best = _mm512_mask_mov_pd(best, closer, root);
             best_prim = _mm512_mask_mov_epi64(best_prim, closer, _mm512_set1_epi64(s.prim as i64));
         }
-        unsafe { _mm512_storeu_pd(batch.t.as_mut_ptr().add(g), best) };
+        unsafe { _mm512_storeu_pd(t.as_mut_ptr(), best) };
         // The low 32 bits of each index: u64::MAX becomes u32::MAX, "no hit".
         let prims = _mm512_cvtepi64_epi32(best_prim);
-        unsafe { _mm256_storeu_si256(batch.prim.as_mut_ptr().add(g).cast(), prims) };
+        unsafe { _mm256_storeu_si256(prim.as_mut_ptr().cast(), prims) };
     }
 }
 
@@ -104,19 +95,19 @@ pub(super) unsafe fn closest_batch_avx512(flat: &[FlatSphere], batch: &mut RayBa
 /// The CPU must have AVX2.
 #[target_feature(enable = "avx2")]
 pub(super) unsafe fn closest_batch_avx2(flat: &[FlatSphere], batch: &mut RayBatch) {
-    const W: usize = 4;
-    let n = prepared_len(batch, W);
     let zero = _mm256_setzero_pd();
     let sign = _mm256_set1_pd(-0.0);
-    for g in (0..n).step_by(W) {
-        // SAFETY (each load and store): g + W <= n, the length of every column (`prepared_len`).
-        let ox = unsafe { _mm256_loadu_pd(batch.ox.as_ptr().add(g)) };
-        let oy = unsafe { _mm256_loadu_pd(batch.oy.as_ptr().add(g)) };
-        let oz = unsafe { _mm256_loadu_pd(batch.oz.as_ptr().add(g)) };
-        let dx = unsafe { _mm256_loadu_pd(batch.dx.as_ptr().add(g)) };
-        let dy = unsafe { _mm256_loadu_pd(batch.dy.as_ptr().add(g)) };
-        let dz = unsafe { _mm256_loadu_pd(batch.dz.as_ptr().add(g)) };
-        let mut best = unsafe { _mm256_loadu_pd(batch.t.as_ptr().add(g)) };
+    let (groups, t, prim) = batch.split();
+    let halves = groups.iter().flat_map(|g| [(g, 0), (g, 4)]);
+    for ((g, h), (t, prim)) in halves.zip(t.chunks_exact_mut(4).zip(prim.chunks_exact_mut(4))) {
+        // SAFETY (each load and store): lanes h..h + 4 of eight, chunks of four.
+        let ox = unsafe { _mm256_loadu_pd(g.ox.as_ptr().add(h)) };
+        let oy = unsafe { _mm256_loadu_pd(g.oy.as_ptr().add(h)) };
+        let oz = unsafe { _mm256_loadu_pd(g.oz.as_ptr().add(h)) };
+        let dx = unsafe { _mm256_loadu_pd(g.dx.as_ptr().add(h)) };
+        let dy = unsafe { _mm256_loadu_pd(g.dy.as_ptr().add(h)) };
+        let dz = unsafe { _mm256_loadu_pd(g.dz.as_ptr().add(h)) };
+        let mut best = unsafe { _mm256_loadu_pd(g.t_max.as_ptr().add(h)) };
         let mut best_prim = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
         for s in flat {
             let r2 = _mm256_set1_pd(s.r2);
@@ -163,11 +154,11 @@ pub(super) unsafe fn closest_batch_avx2(flat: &[FlatSphere], batch: &mut RayBatc
             let prim = _mm256_castsi256_pd(_mm256_set1_epi64x(s.prim as i64));
             best_prim = _mm256_blendv_pd(best_prim, prim, closer);
         }
-        unsafe { _mm256_storeu_pd(batch.t.as_mut_ptr().add(g), best) };
-        let mut prims = [0u64; W];
+        unsafe { _mm256_storeu_pd(t.as_mut_ptr(), best) };
+        let mut prims = [0u64; 4];
         // SAFETY: `prims` holds four u64.
         unsafe { _mm256_storeu_si256(prims.as_mut_ptr().cast(), _mm256_castpd_si256(best_prim)) };
-        for (out, p) in batch.prim[g..g + W].iter_mut().zip(prims) {
+        for (out, p) in prim.iter_mut().zip(prims) {
             *out = p as u32;
         }
     }
