@@ -476,9 +476,9 @@ thread_local! {
 
 /// Most camera samples traced side by side in one stream: far more than a batch needs to keep
 /// the vector units busy (a 320-pixel row is 320), few enough that a thread's stream buffers
-/// stay ~2.4 MB whatever the image's width and the adaptive map (`path`: 448 bytes of path,
-/// sampler and shadow rays, up to 3 rays of 116 in each of two batches, the round's and the
-/// next's (56 as pushed, 60 in columns and answers), the plan's 16 and the result's 32). The
+/// stay ~1.9 MB whatever the image's width and the adaptive map (`path`: 448 bytes of path,
+/// sampler and shadow rays, up to 3 rays of 68 in each of two batches, the round's and the
+/// next's (56 in columns, 12 of answers), the plan's 16 and the result's 32). The
 /// unit tests' 40-pixel rows are cut in pieces too, so they check that the pieces' joins change
 /// no sample.
 const STREAM_SAMPLES: usize = if cfg!(test) { 24 } else { 2048 };

@@ -313,7 +313,7 @@ impl SphereLanes {
     }
 
     /// The reference for the x86 copies (`x86`), which must give its bits, and the code on
-    /// other targets. Each copy spreads the rays into columns itself, in its own instructions.
+    /// other targets.
     #[inline(always)]
     fn closest_batch_portable(&self, batch: &mut RayBatch) {
         batch.prepare();
