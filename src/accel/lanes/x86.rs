@@ -10,7 +10,10 @@
 
 use std::arch::x86_64::*;
 
-use super::{FlatSphere, RayBatch};
+use super::{FlatSphere, RayBatch, LANES};
+
+// A group is one AVX-512 vector of f64, or two AVX2 ones.
+const _: () = assert!(LANES == 8);
 
 /// Eight rays a vector. `batch` is prepared (its outputs sized to whole groups).
 ///
@@ -23,7 +26,7 @@ pub(super) unsafe fn closest_batch_avx512(flat: &[FlatSphere], batch: &mut RayBa
     let (groups, t, prim) = batch.split();
     for (g, (t, prim)) in groups
         .iter()
-        .zip(t.chunks_exact_mut(8).zip(prim.chunks_exact_mut(8)))
+        .zip(t.chunks_exact_mut(LANES).zip(prim.chunks_exact_mut(LANES)))
     {
         // SAFETY (each load and store): every array and chunk here holds eight lanes.
         let ox = unsafe { _mm512_loadu_pd(g.ox.as_ptr()) };
@@ -89,7 +92,9 @@ pub(super) unsafe fn closest_batch_avx512(flat: &[FlatSphere], batch: &mut RayBa
     }
 }
 
-/// Four rays a vector, the same steps in AVX2.
+/// Four rays a vector, the same steps in AVX2 (written out again rather than behind a vector
+/// trait: each line is its own instruction set's intrinsic, and where AVX-512 has mask registers
+/// AVX2 has vector masks and `blendv`).
 ///
 /// # Safety
 /// The CPU must have AVX2.
