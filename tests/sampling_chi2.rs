@@ -284,32 +284,77 @@ fn clipped_sphere_light_samples_its_visible_cap() {
     let z0 = (4.0 + 11.5f64 * 11.5 - 100.0) / (2.0 * 2.0 * 11.5);
     assert!((clip.h_in - (1.0 - z0)).abs() < 1e-12, "h_in {}", clip.h_in);
     assert!((clip.h_in + clip.h_out - 2.0).abs() < 1e-12);
+    check_cap_samples(
+        &l,
+        &cutter,
+        96,
+        &[
+            (
+                "clipped light, inside the cutter",
+                DVec3::new(0.3, -0.2, 0.0),
+                true,
+            ),
+            // Inside the ball around the cap's rim: the cap is sampled by area.
+            (
+                "clipped light, next to the cap",
+                DVec3::new(0.3, 0.2, 1.6),
+                true,
+            ),
+            (
+                "clipped light, outside the cutter",
+                DVec3::new(0.5, 0.4, 9.0),
+                false,
+            ),
+        ],
+    );
+}
+
+/// A cap about as flat as smallpt's (a radius-100 light poking 0.5 through a radius-1000
+/// ceiling: 1 - cos of its half-angle 0.0045, below `FLAT_CAP`), sampled by area alone also from
+/// outside the ball around its rim (radius 9.5), where a curved cap mixes in the cone.
+#[test]
+fn a_flat_clipped_cap_is_sampled_by_area_from_everywhere() {
+    let cutter = Sphere::new(DVec3::new(0.0, 0.0, -1000.0), 1000.0);
+    let l = light(DVec3::new(0.0, 0.0, 99.5), 100.0).with_clips([&cutter]);
+    let clip = l.clips().next().copied().expect("one clip");
+    // (r + ro - d)(ro + d - r) / (2 r d), as above.
+    let h = 0.5 * 1999.5 / (2.0 * 100.0 * 1099.5);
+    assert!((clip.h_in - h).abs() < 1e-12, "h_in {}", clip.h_in);
+    // The flat cap's rim cuts across bins as a thinner sliver than the curved one's.
+    check_cap_samples(
+        &l,
+        &cutter,
+        256,
+        &[
+            ("flat cap, far below", DVec3::new(4.0, -3.0, -15.0), true),
+            ("flat cap, to the side", DVec3::new(15.0, 5.0, -8.0), true),
+            ("flat cap, next to it", DVec3::new(3.0, -2.0, -2.0), true),
+        ],
+    );
+    // By area alone, no draw is lost from below: the cone around the rim's ball loses those
+    // that miss the cap.
+    let mut rng = Rng::new(3);
+    for p in [DVec3::new(4.0, -3.0, -15.0), DVec3::new(15.0, 5.0, -8.0)] {
+        let kept = (0..10_000)
+            .filter(|_| l.sample(p, p, (rng.next_f64(), rng.next_f64())).is_some())
+            .count();
+        assert_eq!(kept, 10_000, "from {p}");
+    }
+}
+
+/// The samples of clipped light `l` from each point p of `cases` (name, p, whether p and its
+/// samples are inside `cutter`) against the pdf the light claims for them.
+/// `sub` as for [`chi2_test_with`].
+fn check_cap_samples(l: &SphereLight, cutter: &Sphere, sub: usize, cases: &[(&str, DVec3, bool)]) {
     let first_hit = |p: DVec3, w: DVec3| {
         l.sphere
             .intersect(&Ray::new(p, w), f64::INFINITY)
             .map(|t| p + w * t)
     };
-    for (name, p, below) in [
-        (
-            "clipped light, inside the cutter",
-            DVec3::new(0.3, -0.2, 0.0),
-            true,
-        ),
-        // Inside the ball around the cap's rim: the cap is sampled by area.
-        (
-            "clipped light, next to the cap",
-            DVec3::new(0.3, 0.2, 1.6),
-            true,
-        ),
-        (
-            "clipped light, outside the cutter",
-            DVec3::new(0.5, 0.4, 9.0),
-            false,
-        ),
-    ] {
+    for &(name, p, below) in cases {
         chi2_test_with(
             name,
-            96,
+            sub,
             true,
             |rng| {
                 let s = l.sample(p, p, (rng.next_f64(), rng.next_f64()))?;
