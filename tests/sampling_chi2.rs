@@ -317,7 +317,7 @@ fn a_flat_clipped_cap_is_sampled_by_area_from_everywhere() {
     let cutter = Sphere::new(DVec3::new(0.0, 0.0, -1000.0), 1000.0);
     let l = light(DVec3::new(0.0, 0.0, 99.5), 100.0).with_clips([&cutter]);
     let clip = l.clips().next().copied().expect("one clip");
-    // (r + ro - d)(ro + d - r) / (2 r d), as above.
+    // (ro - d + r)(ro + d - r) / (2 r d), the law of cosines above as products of differences.
     let h = 0.5 * 1999.5 / (2.0 * 100.0 * 1099.5);
     assert!((clip.h_in - h).abs() < 1e-12, "h_in {}", clip.h_in);
     // The flat cap's rim cuts across bins as a thinner sliver than the curved one's.

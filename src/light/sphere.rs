@@ -147,12 +147,13 @@ enum Strategy<'a> {
     Inside,
     /// Outside or on the surface: a cone with the given axis and 1 - cos(theta_max).
     Cone { axis: DVec3, one_minus_cos_max: f64 },
-    /// Outside, with a cut hiding most of the sphere, and outside the ball around the cap's rim
-    /// that holds the whole cap, a cap not flatter than [`FLAT_CAP`]: half the samples uniform in the cone that ball subtends, kept
-    /// where they reach the cap (pdf 1 / solid angle: no 1 / d^2), half uniform on the cap by
-    /// area (no samples lost where the cap fills little of that cone, as seen at grazing angles
-    /// from the ceiling next to it); the pdf is the mixture's, so each sample is weighted by the
-    /// balance heuristic between the two and neither's worst case survives.
+    /// Outside, with a cut hiding most of the sphere, outside the ball around the cap's rim that
+    /// holds the whole cap, and the cap not flatter than [`FLAT_CAP`]: half the samples uniform
+    /// in the cone that ball subtends, kept where they reach the cap (pdf 1 / solid angle: no
+    /// 1 / d^2), half uniform on the cap by area (no samples lost where the cap fills little of
+    /// that cone, as seen at grazing angles from the ceiling next to it); the pdf is the
+    /// mixture's, so each sample is weighted by the balance heuristic between the two and
+    /// neither's worst case survives.
     CapCone {
         cap: &'a Cap,
         axis: DVec3,
