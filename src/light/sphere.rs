@@ -217,9 +217,13 @@ impl SphereLight {
                 }
             }
             if let Some(cap) = best {
+                // A flat cap needs no distance to its rim: it is sampled by area from anywhere.
+                if cap.h <= FLAT_CAP {
+                    return Strategy::Cap(cap);
+                }
                 let to = cap.rim_centre - p;
                 let dr2 = to.length_squared();
-                if cap.h > FLAT_CAP && dr2 > cap.rim2 * (1.0 + 1e-6) && dr2.is_finite() {
+                if dr2 > cap.rim2 * (1.0 + 1e-6) && dr2.is_finite() {
                     let sin2 = cap.rim2 / dr2;
                     return Strategy::CapCone {
                         cap,
