@@ -320,21 +320,18 @@ fn a_flat_clipped_cap_is_sampled_by_area_from_everywhere() {
     // (ro - d + r)(ro + d - r) / (2 r d), the law of cosines above as products of differences.
     let h = 0.5 * 1999.5 / (2.0 * 100.0 * 1099.5);
     assert!((clip.h_in - h).abs() < 1e-12, "h_in {}", clip.h_in);
+    // Outside the rim's ball (the first two) and inside it.
+    let cases = [
+        ("flat cap, far below", DVec3::new(4.0, -3.0, -15.0), true),
+        ("flat cap, to the side", DVec3::new(15.0, 5.0, -8.0), true),
+        ("flat cap, next to it", DVec3::new(3.0, -2.0, -2.0), true),
+    ];
     // The flat cap's rim cuts across bins as a thinner sliver than the curved one's.
-    check_cap_samples(
-        &l,
-        &cutter,
-        256,
-        &[
-            ("flat cap, far below", DVec3::new(4.0, -3.0, -15.0), true),
-            ("flat cap, to the side", DVec3::new(15.0, 5.0, -8.0), true),
-            ("flat cap, next to it", DVec3::new(3.0, -2.0, -2.0), true),
-        ],
-    );
+    check_cap_samples(&l, &cutter, 256, &cases);
     // By area alone, no draw is lost from below: the cone around the rim's ball loses those
     // that miss the cap.
     let mut rng = Rng::new(3);
-    for p in [DVec3::new(4.0, -3.0, -15.0), DVec3::new(15.0, 5.0, -8.0)] {
+    for &(_, p, _) in &cases[..2] {
         let kept = (0..10_000)
             .filter(|_| l.sample(p, p, (rng.next_f64(), rng.next_f64())).is_some())
             .count();
