@@ -1,7 +1,9 @@
 //! Vectors, rays and orthonormal frames. Geometry and shading run in f64: smallpt's walls are
 //! spheres of radius 1e5, and f32 loses the room (see `geometry::sphere`).
 
-pub use glam::DVec3;
+mod dvec3;
+
+pub use dvec3::DVec3;
 
 /// A ray with a unit direction. Origins are placed by [`crate::geometry::spawn_origin`], the one
 /// place that knows how far off a surface a new ray must start.

@@ -156,7 +156,10 @@ fn check(text: &str, case: u64) -> Result<(), TestCaseError> {
     match &loaded {
         Ok(tris) => {
             for t in tris {
-                prop_assert!(t.p.iter().all(|v| v.is_finite()), "non-finite vertex {t:?}");
+                prop_assert!(
+                    t.p().iter().all(|v| v.is_finite()),
+                    "non-finite vertex {t:?}"
+                );
             }
         }
         Err(msg) => prop_assert!(!msg.is_empty()),

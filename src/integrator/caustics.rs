@@ -148,7 +148,8 @@ pub type Splat = (u32, [f32; 3]);
 /// through y and the same chain. Single precision where only a weight or a colour depends on it.
 #[derive(Clone, Copy, Debug)]
 pub struct CausticVertex {
-    pub p: DVec3,
+    /// The position, as an array: a `DVec3` is padded to 32 bytes.
+    pub p: [f64; 3],
     /// The unit normal, octahedron-encoded ([`encode_unit`]).
     pub n: u32,
     /// Unit direction from y back along the light path (towards the last specular vertex),
@@ -201,7 +202,7 @@ impl CausticVertex {
     }
 
     pub fn alpha(&self) -> DVec3 {
-        glam::Vec3::from_array(self.alpha).as_dvec3()
+        DVec3::from(glam::Vec3::from_array(self.alpha).as_dvec3())
     }
 }
 
@@ -767,7 +768,7 @@ impl CausticTracer {
                 self.splat(scene, &hit, wo, beta, out);
                 if self.connect {
                     let vertex = CausticVertex {
-                        p: hit.p,
+                        p: hit.p.to_array(),
                         n: encode_unit(hit.n),
                         wo: encode_unit(wo),
                         alpha: beta.as_vec3().to_array(),
@@ -1126,7 +1127,7 @@ fn emission_point(
             let n = l.triangle.normal()?;
             let max = l
                 .triangle
-                .p
+                .p()
                 .iter()
                 .map(|p| p.abs().max_element())
                 .fold(0.0, f64::max);
@@ -1153,7 +1154,7 @@ mod tests {
                 None => warp::uniform_sphere((rng.next_f64(), rng.next_f64())),
             };
             let back = decode_unit(encode_unit(v));
-            worst = worst.max(v.angle_between(back));
+            worst = worst.max(v.to_glam().angle_between(back.to_glam()));
         }
         assert!(worst < 1e-4, "worst angle {worst:e}");
         assert_eq!(std::mem::size_of::<CausticVertex>(), 56);
@@ -1235,7 +1236,7 @@ mod tests {
                 let mut r = Reservoir::new(cap, Rng::for_sample(3, c as u64, t));
                 for _ in 0..n {
                     r.offer(CausticVertex {
-                        p: DVec3::ZERO,
+                        p: [0.0; 3],
                         n: 0,
                         wo: 0,
                         alpha: [1.0; 3],

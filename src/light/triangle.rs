@@ -72,7 +72,7 @@ mod tests {
 
     /// Solid angle of a triangle seen from the origin (Van Oosterom and Strackee 1983).
     fn solid_angle(t: &Triangle, p: DVec3) -> f64 {
-        let [a, b, c] = t.p.map(|v| v - p);
+        let [a, b, c] = t.p().map(|v| v - p);
         let (la, lb, lc) = (a.length(), b.length(), c.length());
         let num = a.dot(b.cross(c)).abs();
         let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;

@@ -56,11 +56,11 @@ impl Transform {
         let m = self.matrix();
         let mut out = Vec::with_capacity(tris.len());
         for t in tris {
-            let p = t.p.map(|v| m * v + self.translate);
+            let p = t.p().map(|v| DVec3::from(m * v.to_glam()) + self.translate);
             if !p.iter().all(|v| v.is_finite()) {
                 return Err("a vertex is not a finite number".into());
             }
-            let t = Triangle { p };
+            let t = Triangle::new(p[0], p[1], p[2]);
             if t.normal().is_some() {
                 out.push(t);
             }
@@ -142,7 +142,7 @@ mod tests {
         let tri = Triangle::new(DVec3::ZERO, DVec3::X, DVec3::Y);
         let out = t.apply(&[tri]).unwrap();
         // x -> 2x -> rotated 90 degrees about z to 2y -> shifted by 10 in x.
-        assert!((out[0].p[1] - DVec3::new(10.0, 2.0, 0.0)).length() < 1e-12);
-        assert!((out[0].p[2] - DVec3::new(8.0, 0.0, 0.0)).length() < 1e-12);
+        assert!((out[0].p()[1] - DVec3::new(10.0, 2.0, 0.0)).length() < 1e-12);
+        assert!((out[0].p()[2] - DVec3::new(8.0, 0.0, 0.0)).length() < 1e-12);
     }
 }
