@@ -5,6 +5,11 @@
 //! two-lane operation plus the shuffles between them. The fourth lane is never read back: sums,
 //! products of elements, comparisons and equality ignore it, so whatever it holds (0 from every
 //! constructor; NaN after dividing by a vector) cannot change a result.
+//!
+//! Written here because no crate has it: glam's padded `Vec3A` is f32 only, and a SIMD crate's
+//! f64x4 (`wide`) picks its intrinsics by the target features the whole build has, not by the
+//! copy chosen at run time (`cpu::ShadingCode`), so in the default build it is written as pairs
+//! of SSE2 operations. Plain lane-wise code lets each copy vectorise for its own features.
 
 use std::fmt;
 use std::iter::Sum;
