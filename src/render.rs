@@ -799,7 +799,7 @@ fn trace_row(
         if splat.0 != pixel {
             splat = (pixel, DVec3::ZERO);
             while let Some(s) = row_splats.next_if(|s| s.0 == pixel) {
-                splat.1 += DVec3::from(glam::Vec3::from_array(s.1).as_dvec3());
+                splat.1 += DVec3::from_array(s.1.map(f64::from));
             }
         }
         let v = v + splat.1;

@@ -91,7 +91,8 @@ mod tests {
         for (idx, t) in tris.iter().enumerate() {
             let ring = idx / (2 * 8);
             let c = knot.centre(TAU * (ring as f64 + 0.5) / 64.0);
-            let centroid = (t.p()[0] + t.p()[1] + t.p()[2]) / 3.0;
+            let [p0, p1, p2] = t.p();
+            let centroid = (p0 + p1 + p2) / 3.0;
             let n = t.normal().expect("no degenerate triangles");
             assert!(n.dot(centroid - c) > 0.0, "triangle {idx} faces inwards");
         }

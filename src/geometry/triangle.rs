@@ -59,7 +59,8 @@ impl Triangle {
     /// (p1 - p0) x (p2 - p0): twice the area, along the geometric normal.
     #[inline]
     pub fn cross(&self) -> DVec3 {
-        (self.p()[1] - self.p()[0]).cross(self.p()[2] - self.p()[0])
+        let [p0, p1, p2] = self.p();
+        (p1 - p0).cross(p2 - p0)
     }
 
     pub fn area(&self) -> f64 {
@@ -165,9 +166,9 @@ impl Triangle {
         match self.intersect_full(ray, f64::INFINITY) {
             Some(h) => {
                 let [b0, b1, b2] = h.b;
-                let p = self.p()[0] * b0 + self.p()[1] * b1 + self.p()[2] * b2;
-                let abs_sum =
-                    (self.p()[0] * b0).abs() + (self.p()[1] * b1).abs() + (self.p()[2] * b2).abs();
+                let [p0, p1, p2] = self.p();
+                let p = p0 * b0 + p1 * b1 + p2 * b2;
+                let abs_sum = (p0 * b0).abs() + (p1 * b1).abs() + (p2 * b2).abs();
                 let err = gamma(7.0) * abs_sum.max_element();
                 Hit { t, p, n, prim, err }
             }
@@ -182,15 +183,14 @@ impl Triangle {
     }
 
     pub fn bounds(&self) -> Aabb {
-        Aabb::EMPTY
-            .grow(self.p()[0])
-            .grow(self.p()[1])
-            .grow(self.p()[2])
+        let [p0, p1, p2] = self.p();
+        Aabb::EMPTY.grow(p0).grow(p1).grow(p2)
     }
 
     /// The point with barycentrics (1 - b1 - b2, b1, b2).
     pub fn point(&self, b1: f64, b2: f64) -> DVec3 {
-        self.p()[0] * (1.0 - b1 - b2) + self.p()[1] * b1 + self.p()[2] * b2
+        let [p0, p1, p2] = self.p();
+        p0 * (1.0 - b1 - b2) + p1 * b1 + p2 * b2
     }
 }
 

@@ -202,7 +202,7 @@ impl CausticVertex {
     }
 
     pub fn alpha(&self) -> DVec3 {
-        DVec3::from(glam::Vec3::from_array(self.alpha).as_dvec3())
+        DVec3::from_array(self.alpha.map(f64::from))
     }
 }
 
