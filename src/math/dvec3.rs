@@ -298,7 +298,10 @@ impl fmt::Debug for DVec3 {
 
 impl fmt::Display for DVec3 {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "[{}, {}, {}]", self.x, self.y, self.z)
+        match f.precision() {
+            Some(p) => write!(f, "[{:.*}, {:.*}, {:.*}]", p, self.x, p, self.y, p, self.z),
+            None => write!(f, "[{}, {}, {}]", self.x, self.y, self.z),
+        }
     }
 }
 
@@ -530,6 +533,10 @@ mod tests {
             let same_f32 = |i: usize| f[i].to_bits() == g_f[i].to_bits() || f[i].is_nan();
             assert!((0..3).all(same_f32), "as_vec3: {f:?} against {g_f:?}");
             check("to_glam", DVec3::from(a.to_glam()), g_a);
+            assert_eq!(
+                format!("{a} {a:.3} {a:?}"),
+                format!("{g_a} {g_a:.3} {g_a:?}")
+            );
             let sum: DVec3 = [a, b, c].iter().sum();
             let g_sum: glam::DVec3 = [g_a, g_b, g_c].iter().sum();
             check("sum", sum, g_sum);
