@@ -34,6 +34,7 @@ pub struct Frame {
 impl Frame {
     /// Duff et al. 2017, "Building an Orthonormal Basis, Revisited": branch-free apart from
     /// `copysign`, so it stays exact for n = -z, where Frisvad's original divides by zero.
+    #[inline(always)]
     pub fn from_normal(n: DVec3) -> Self {
         let sign = 1.0f64.copysign(n.z);
         let a = -1.0 / (sign + n.z);
@@ -43,10 +44,12 @@ impl Frame {
         Frame { s, t, n }
     }
 
+    #[inline(always)]
     pub fn to_world(&self, v: DVec3) -> DVec3 {
         self.s * v.x + self.t * v.y + self.n * v.z
     }
 
+    #[inline(always)]
     pub fn to_local(&self, v: DVec3) -> DVec3 {
         DVec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }

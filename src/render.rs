@@ -403,7 +403,7 @@ pub fn sample_pixel(
 /// [`sample_pixel`] and the number of closest-hit queries its path traced. With `caustics`,
 /// the camera path leaves out the caustics the tracer splats and shares with its vertices the
 /// caustics seen after a bounce.
-#[inline]
+#[inline(always)]
 pub fn sample_pixel_counted(
     scene: &Scene,
     settings: &RenderSettings,
@@ -884,12 +884,13 @@ fn sample_row_body(rows: &PassRows, y: u32, scratch: &mut RowScratch, out: &mut 
     let caustics = caustics.map(|c| c.for_row(settings.seed, pass, y));
     out.clear();
     if settings.integrator == IntegratorKind::Painterly {
-        out.extend(
-            scratch
-                .plan
-                .iter()
-                .map(|&(x, sample)| sample_pixel_counted(scene, settings, x, y, sample, caustics)),
-        );
+        // A plain loop, not `extend` over a map: the closure was compiled apart from the fast
+        // copy, in portable code.
+        for &(x, sample) in &scratch.plan {
+            out.push(sample_pixel_counted(
+                scene, settings, x, y, sample, caustics,
+            ));
+        }
         return;
     }
     let max_depth = integrator::depth_limit(settings);

@@ -109,7 +109,7 @@ pub struct PixelSample {
 }
 
 /// Radiance along `ray` by the integrator `settings` choose.
-#[inline]
+#[inline(always)]
 pub fn radiance(
     settings: &RenderSettings,
     scene: &Scene,

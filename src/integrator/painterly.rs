@@ -39,6 +39,7 @@ use crate::math::{DVec3, Ray};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
+#[inline(always)]
 pub fn radiance(
     scene: &Scene,
     mut ray: Ray,
@@ -152,7 +153,7 @@ fn paints(material: &Material) -> bool {
 }
 
 /// The painterly replacement of `material.sample`: `None` ends the path.
-#[inline]
+#[inline(always)]
 fn painterly_sample(
     material: &Material,
     wo: DVec3,

@@ -664,7 +664,7 @@ pub(crate) fn emission_mis_weight(
 /// it, and its shadow ray. Returns f cos Le w / pdf, without the path throughput. The weight w is
 /// the power heuristic against BSDF sampling when `mis` is set, else 1 (a vertex whose BSDF side
 /// cannot weigh itself, as at painterly bounces). Always draws the same three dimensions.
-#[inline]
+#[inline(always)]
 pub(crate) fn direct_light(
     scene: &Scene,
     hit: &Hit,

@@ -44,7 +44,7 @@ const MIN_LEN2: f64 = 1e-12;
 
 /// The painterly bounce at a surface with unit normal `n` (facing the side the path is on).
 /// `None` for the degenerate N + h ~ 0 and anything not finite, so no such value reaches a path.
-#[inline]
+#[inline(always)]
 pub fn painterly_direction(
     n: DVec3,
     hemisphere: Hemisphere,
