@@ -2,9 +2,9 @@
 //! this crate uses) and glam's formulas, so every result is the same bit for bit. Element-wise
 //! operations run on all four lanes: in the x86-64-v3 copies of the hot code one `vaddpd` or
 //! `vmulpd` on a ymm register does what glam's three-field struct did in a scalar and a
-//! two-lane operation plus the shuffles between them. The fourth lane is never read back: sums,
-//! products of elements, comparisons and equality ignore it, so whatever it holds (0 from every
-//! constructor; NaN after dividing by a vector) cannot change a result.
+//! two-lane operation plus the shuffles between them. The fourth lane is never read back: dot
+//! products, sums of elements, comparisons, equality and printing ignore it, so whatever it
+//! holds (0 from every constructor; NaN after dividing by a vector) cannot change a result.
 //!
 //! Written here because no crate has it: glam's padded `Vec3A` is f32 only, and a SIMD crate's
 //! f64x4 (`wide`) picks its intrinsics by the target features the whole build has, not by the
@@ -12,10 +12,7 @@
 //! of SSE2 operations. Plain lane-wise code lets each copy vectorise for its own features.
 
 use std::fmt;
-use std::iter::Sum;
-use std::ops::{
-    Add, AddAssign, Div, DivAssign, Index, IndexMut, Mul, MulAssign, Neg, Sub, SubAssign,
-};
+use std::ops::{Add, AddAssign, Div, DivAssign, Index, Mul, MulAssign, Neg, Sub, SubAssign};
 
 #[derive(Clone, Copy, Default)]
 #[repr(C, align(32))]
@@ -29,10 +26,6 @@ pub struct DVec3 {
 impl DVec3 {
     pub const ZERO: Self = Self::splat(0.0);
     pub const ONE: Self = Self::splat(1.0);
-    pub const NEG_ONE: Self = Self::splat(-1.0);
-    pub const INFINITY: Self = Self::splat(f64::INFINITY);
-    pub const NEG_INFINITY: Self = Self::splat(f64::NEG_INFINITY);
-    pub const NAN: Self = Self::splat(f64::NAN);
     pub const X: Self = Self::new(1.0, 0.0, 0.0);
     pub const Y: Self = Self::new(0.0, 1.0, 0.0);
     pub const Z: Self = Self::new(0.0, 0.0, 1.0);
@@ -128,18 +121,8 @@ impl DVec3 {
     }
 
     #[inline(always)]
-    pub fn element_product(self) -> f64 {
-        self.x * self.y * self.z
-    }
-
-    #[inline(always)]
     pub fn abs(self) -> Self {
         self.lanes(f64::abs)
-    }
-
-    #[inline(always)]
-    pub fn signum(self) -> Self {
-        self.lanes(f64::signum)
     }
 
     #[inline(always)]
@@ -148,18 +131,8 @@ impl DVec3 {
     }
 
     #[inline(always)]
-    pub fn floor(self) -> Self {
-        self.lanes(f64::floor)
-    }
-
-    #[inline(always)]
     pub fn is_finite(self) -> bool {
         self.x.is_finite() && self.y.is_finite() && self.z.is_finite()
-    }
-
-    #[inline(always)]
-    pub fn is_nan(self) -> bool {
-        self.x.is_nan() || self.y.is_nan() || self.z.is_nan()
     }
 
     #[inline(always)]
@@ -173,18 +146,8 @@ impl DVec3 {
     }
 
     #[inline(always)]
-    pub fn length_recip(self) -> f64 {
+    fn length_recip(self) -> f64 {
         1.0 / self.length()
-    }
-
-    #[inline(always)]
-    pub fn distance(self, rhs: Self) -> f64 {
-        (self - rhs).length()
-    }
-
-    #[inline(always)]
-    pub fn distance_squared(self, rhs: Self) -> f64 {
-        (self - rhs).length_squared()
     }
 
     #[inline(always)]
@@ -206,28 +169,6 @@ impl DVec3 {
     #[inline(always)]
     pub fn normalize_or_zero(self) -> Self {
         self.normalize_or(Self::ZERO)
-    }
-
-    #[inline(always)]
-    pub fn is_normalized(self) -> bool {
-        (self.length_squared() - 1.0).abs() <= 2e-4
-    }
-
-    #[inline(always)]
-    pub fn lerp(self, rhs: Self, s: f64) -> Self {
-        self * (1.0 - s) + rhs * s
-    }
-
-    #[inline(always)]
-    pub fn reflect(self, normal: Self) -> Self {
-        self - 2.0 * self.dot(normal) * normal
-    }
-
-    #[inline]
-    pub fn abs_diff_eq(self, rhs: Self, max_abs_diff: f64) -> bool {
-        (self.x - rhs.x).abs() <= max_abs_diff
-            && (self.y - rhs.y).abs() <= max_abs_diff
-            && (self.z - rhs.z).abs() <= max_abs_diff
     }
 
     #[inline(always)]
@@ -265,20 +206,6 @@ impl From<glam::DVec3> for DVec3 {
     }
 }
 
-impl From<[f64; 3]> for DVec3 {
-    #[inline]
-    fn from(a: [f64; 3]) -> Self {
-        Self::from_array(a)
-    }
-}
-
-impl From<DVec3> for [f64; 3] {
-    #[inline]
-    fn from(v: DVec3) -> Self {
-        v.to_array()
-    }
-}
-
 impl PartialEq for DVec3 {
     #[inline]
     fn eq(&self, rhs: &Self) -> bool {
@@ -313,18 +240,6 @@ impl Index<usize> for DVec3 {
             0 => &self.x,
             1 => &self.y,
             2 => &self.z,
-            _ => panic!("index out of bounds"),
-        }
-    }
-}
-
-impl IndexMut<usize> for DVec3 {
-    #[inline]
-    fn index_mut(&mut self, i: usize) -> &mut f64 {
-        match i {
-            0 => &mut self.x,
-            1 => &mut self.y,
-            2 => &mut self.z,
             _ => panic!("index out of bounds"),
         }
     }
@@ -382,18 +297,6 @@ element_wise!(Add, add, AddAssign, add_assign, +);
 element_wise!(Sub, sub, SubAssign, sub_assign, -);
 element_wise!(Mul, mul, MulAssign, mul_assign, *);
 element_wise!(Div, div, DivAssign, div_assign, /);
-
-impl Sum for DVec3 {
-    fn sum<I: Iterator<Item = Self>>(iter: I) -> Self {
-        iter.fold(Self::ZERO, |a, b| a + b)
-    }
-}
-
-impl<'a> Sum<&'a DVec3> for DVec3 {
-    fn sum<I: Iterator<Item = &'a Self>>(iter: I) -> Self {
-        iter.fold(Self::ZERO, |a, b| a + *b)
-    }
-}
 
 #[cfg(test)]
 mod tests {
@@ -489,27 +392,20 @@ mod tests {
             check("cross", a.cross(b), g_a.cross(g_b));
             check("min", a.min(b), g_a.min(g_b));
             check("max", a.max(b), g_a.max(g_b));
+            let (lo, hi) = (b.min(c), b.max(c));
+            check(
+                "clamp",
+                a.clamp(lo, hi),
+                g_a.clamp(g_b.min(g_c), g_b.max(g_c)),
+            );
             check_f("min_element", a.min_element(), g_a.min_element());
             check_f("max_element", a.max_element(), g_a.max_element());
             check_f("element_sum", a.element_sum(), g_a.element_sum());
-            check_f(
-                "element_product",
-                a.element_product(),
-                g_a.element_product(),
-            );
             check("abs", a.abs(), g_a.abs());
-            check("signum", a.signum(), g_a.signum());
             check("recip", a.recip(), g_a.recip());
-            check("floor", a.floor(), g_a.floor());
             check_f("length", a.length(), g_a.length());
             check_f("length_squared", a.length_squared(), g_a.length_squared());
             check_f("length_recip", a.length_recip(), g_a.length_recip());
-            check_f("distance", a.distance(b), g_a.distance(g_b));
-            check_f(
-                "distance_squared",
-                a.distance_squared(b),
-                g_a.distance_squared(g_b),
-            );
             check("normalize", a.normalize(), g_a.normalize());
             check(
                 "normalize_or_zero",
@@ -518,17 +414,12 @@ mod tests {
             );
             check("normalize_or", a.normalize_or(b), g_a.normalize_or(g_b));
             assert_eq!(a.try_normalize().is_some(), g_a.try_normalize().is_some());
-            check("lerp", a.lerp(b, s), g_a.lerp(g_b, s));
-            check("reflect", a.reflect(b), g_a.reflect(g_b));
             assert_eq!(a.is_finite(), g_a.is_finite());
-            assert_eq!(a.is_nan(), g_a.is_nan());
-            assert_eq!(a.is_normalized(), g_a.is_normalized());
             assert_eq!(a == b, g_a == g_b);
             assert_eq!(a == a, g_a == g_a);
             assert_eq!(a.cmple(b), g_a.cmple(g_b));
             assert_eq!(a.cmpge(b), g_a.cmpge(g_b));
             assert_eq!(a.cmpgt(b), g_a.cmpgt(g_b));
-            assert_eq!(a.abs_diff_eq(b, s.abs()), g_a.abs_diff_eq(g_b, s.abs()));
             let (f, g_f) = (a.as_vec3().to_array(), g_a.as_vec3().to_array());
             let same_f32 = |i: usize| f[i].to_bits() == g_f[i].to_bits() || f[i].is_nan();
             assert!((0..3).all(same_f32), "as_vec3: {f:?} against {g_f:?}");
@@ -537,9 +428,6 @@ mod tests {
                 format!("{a} {a:.3} {a:?}"),
                 format!("{g_a} {g_a:.3} {g_a:?}")
             );
-            let sum: DVec3 = [a, b, c].iter().sum();
-            let g_sum: glam::DVec3 = [g_a, g_b, g_c].iter().sum();
-            check("sum", sum, g_sum);
         }
     }
 
