@@ -247,3 +247,118 @@ fn path_and_naive_agree_on_the_quad_light_cornell_box() {
         (p - q).abs()
     );
 }
+
+/// A quad light at z = 0 facing +z (its vertices counter-clockwise seen from +z), a grey wall at
+/// z = -5 behind it that only its back face could light, and a camera at `camera_z` looking
+/// at (0, 0, `look_z`).
+fn light_and_wall(camera_z: f64, look_z: f64, two_sided: bool) -> String {
+    format!(
+        "[camera]\nposition = [0, 0, {camera_z}]\nlook_at = [0, 0, {look_z}]\nvfov = 40\n\n\
+         [[quad]]\nname = \"light\"\ncorner = [-1, -1, 0]\nedge1 = [2, 0, 0]\nedge2 = [0, 2, 0]\n\
+         emission = 3\n{}\n\
+         [[quad]]\nname = \"wall\"\ncorner = [-40, -40, -5]\nedge1 = [80, 0, 0]\nedge2 = [0, 80, 0]\n\
+         color = 0.5\n",
+        if two_sided { "two_sided = true\n" } else { "" }
+    )
+}
+fn render_str(src: &str, integrator: IntegratorKind, size: u32, spp: u32) -> Vec<f32> {
+    let scene = Arc::new(scene::load_str(src, "emitter.toml").expect("scene"));
+    let settings = RenderSettings::merged(&[
+        &scene.render,
+        &SettingsOverrides {
+            width: Some(size),
+            height: Some(size),
+            spp: Some(spp),
+            integrator: Some(integrator),
+            seed: Some(3),
+            ..Default::default()
+        },
+    ]);
+    let mut r = Renderer::new(scene, settings).expect("renderer");
+    r.render(&AtomicBool::new(false), |_| true);
+    assert_eq!(r.stats().invalid, 0);
+    r.film().mean_rgb_f32()
+}
+
+/// Emitters are one-sided by default: seen from behind a quad light is black, and the wall
+/// behind it, which only its back face could light, stays black under every integrator (light
+/// sampling never picks the back face, BSDF sampling finds no emission there). The front face
+/// shows its radiance exactly. With `two_sided = true` the back shows it too and the wall is lit.
+#[test]
+fn quad_lights_emit_from_their_front_face_only_unless_two_sided() {
+    let centre = |img: &[f32], size: u32| {
+        let i = ((size / 2) * size + size / 2) as usize * 3;
+        [img[i], img[i + 1], img[i + 2]]
+    };
+    for integrator in [
+        IntegratorKind::Path,
+        IntegratorKind::Naive,
+        IntegratorKind::Painterly,
+    ] {
+        // From the front: the light's face, exactly.
+        let front = render_str(&light_and_wall(4.0, 0.0, false), integrator, 9, 4);
+        assert_eq!(centre(&front, 9), [3.0; 3], "{integrator:?}");
+        // From behind (the camera between the light and the wall, looking back at the light):
+        // its back face, and the wall lit by nothing.
+        let behind = render_str(&light_and_wall(-2.0, 0.0, false), integrator, 9, 16);
+        assert!(behind.iter().all(|&v| v == 0.0), "{integrator:?}");
+        let wall = render_str(&light_and_wall(-4.0, -5.0, false), integrator, 9, 16);
+        assert!(wall.iter().all(|&v| v == 0.0), "{integrator:?}");
+        // Two-sided: the back face shows its radiance and the wall is lit.
+        let back = render_str(&light_and_wall(-2.0, 0.0, true), integrator, 9, 4);
+        assert_eq!(centre(&back, 9), [3.0; 3], "{integrator:?}");
+        let lit = render_str(&light_and_wall(-4.0, -5.0, true), integrator, 9, 16);
+        assert!(lit.iter().sum::<f32>() > 0.0, "{integrator:?}");
+    }
+}
+
+/// The summary says how many emitters are one-sided and how many two-sided, and `two_sided`
+/// is refused where it means nothing, naming the field.
+#[test]
+fn emitter_sidedness_is_reported_and_checked() {
+    let one = scene::load_str(&light_and_wall(4.0, 0.0, false), "s.toml").expect("scene");
+    assert!(
+        one.report
+            .light_sampling
+            .starts_with("2 emitters (2 one-sided, 0 two-sided)"),
+        "{}",
+        one.report.light_sampling
+    );
+    let two = scene::load_str(&light_and_wall(4.0, 0.0, true), "s.toml").expect("scene");
+    assert!(
+        two.report
+            .light_sampling
+            .contains("0 one-sided, 2 two-sided"),
+        "{}",
+        two.report.light_sampling
+    );
+    let mesh = scene::load("cornell-mesh").expect("built-in");
+    assert!(
+        mesh.report
+            .light_sampling
+            .contains("2 one-sided, 0 two-sided"),
+        "{}",
+        mesh.report.light_sampling
+    );
+    let bad = [
+        (
+            "[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nemission = 1\ntwo_sided = true\n",
+            "sphere[0].two_sided",
+            "a sphere emits outwards",
+        ),
+        (
+            "[[quad]]\ncorner = [0, 0, 0]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\ntwo_sided = true\n",
+            "quad[0].two_sided",
+            "only applies to emitters",
+        ),
+    ];
+    for (src, field, problem) in bad {
+        let e = scene::load_str(src, "bad.toml")
+            .expect_err("refused")
+            .to_string();
+        assert!(
+            e.contains("bad.toml") && e.contains(field) && e.contains(problem),
+            "{e}"
+        );
+    }
+}

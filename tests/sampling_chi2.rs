@@ -167,6 +167,7 @@ fn diffuse_material_samples_what_it_evaluates() {
         kind: MaterialKind::Diffuse,
         color: DVec3::splat(0.5),
         emission: DVec3::ZERO,
+        one_sided: false,
     };
     let n = DVec3::new(0.3, 0.4, -0.866).normalize();
     let wo = DVec3::new(0.1, -0.2, -1.0).normalize();

@@ -125,8 +125,8 @@ pub enum Region {
     /// A sphere's cap n . axis >= 1 - h (n the outward normal), left outwards: the part of a
     /// light cut by another sphere's surface that lies on the specular objects' side.
     Cap { axis: DVec3, h: f64 },
-    /// A triangle, both sides (triangle emitters are two-sided).
-    Triangle,
+    /// A triangle: its front face, or both faces of a two-sided emitter.
+    Triangle { two_sided: bool },
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -135,7 +135,8 @@ struct Emitter {
     region: Region,
     /// Probability of starting a path here.
     pmf: f64,
-    /// The region's area (the start point's density is 1 / area).
+    /// The region's area: the start point's density is 1 / area. A two-sided triangle's is its
+    /// area once, not twice: its points are drawn once and its directions cover both faces.
     area: f64,
 }
 
@@ -514,11 +515,20 @@ impl CausticTracer {
         let mut emitters = Vec::new();
         let mut emitter_of = vec![None; scene.lights.len()];
         for (i, light) in scene.lights.lights.iter().enumerate() {
-            let (region, area) = match light {
-                Light::Sphere(l) => sphere_region(l, &targets),
-                Light::Triangle(l) => (Region::Triangle, 2.0 * l.triangle.area()),
+            let (region, area, sides) = match light {
+                Light::Sphere(l) => {
+                    let (region, area) = sphere_region(l, &targets);
+                    (region, area, 1.0)
+                }
+                Light::Triangle(l) => (
+                    Region::Triangle {
+                        two_sided: l.two_sided,
+                    },
+                    l.triangle.area(),
+                    l.sides(),
+                ),
             };
-            let power = area * luminance(emission(light)).max(0.0);
+            let power = sides * area * luminance(emission(light)).max(0.0);
             if power > 0.0 && power.is_finite() {
                 emitter_of[i] = Some(emitters.len());
                 emitters.push(Emitter {
@@ -620,7 +630,7 @@ impl CausticTracer {
     pub fn covers(&self, light: u32, n: DVec3, d: DVec3) -> bool {
         match self.emitter(light).map(|e| e.region) {
             None => false,
-            Some(Region::Triangle) => true,
+            Some(Region::Triangle { two_sided }) => two_sided || d.dot(n) < 0.0,
             Some(Region::Sphere) => d.dot(n) < 0.0,
             Some(Region::Cap { axis, h }) => d.dot(n) < 0.0 && on_cap(n, axis, h),
         }
@@ -737,8 +747,8 @@ impl CausticTracer {
         };
         let cos0 = w.dot(n0);
         let cos0 = match e.region {
-            Region::Triangle => cos0.abs(),
-            // Sphere regions cover outward emission only.
+            Region::Triangle { two_sided: true } => cos0.abs(),
+            // Sphere regions and one-sided triangles cover emission from their front alone.
             _ => cos0,
         };
         if cos0 <= 0.0 {
@@ -1316,6 +1326,57 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// The density the camera paths weigh a light they find against the joins with
+    /// ([`CausticTracer::light_pdf`]) is the one the light paths start with (emitter pmf x area
+    /// pdf x direction pdf, as `trace` records it), for sphere lights, one-sided quads and
+    /// two-sided ones. Two-sided quads once counted their area twice in the first but not the
+    /// second, so the MIS weights of a caustic seen after a bounce summed to up to 4/3.
+    #[test]
+    fn the_camera_side_light_density_is_the_one_light_paths_start_with() {
+        let quad = |sides: &str| {
+            format!(
+                "[[quad]]\ncorner = [-1, 4, -1]\nedge1 = [2, 0, 0]\nedge2 = [0, 0, 2]\n\
+                 emission = 5\n{sides}\n[[sphere]]\nmaterial = \"glass\"\ncenter = [0, 1, 0]\n\
+                 radius = 1\n[[sphere]]\ncenter = [0, -1e4, 0]\nradius = 1e4\n\
+                 [camera]\nposition = [0, 2, 8]\nlook_at = [0, 0, 0]\n"
+            )
+        };
+        let sources = [
+            quad(""),
+            quad("two_sided = true"),
+            quad("").replace(
+                "[[quad]]\ncorner = [-1, 4, -1]\nedge1 = [2, 0, 0]\nedge2 = [0, 0, 2]",
+                "[[sphere]]\ncenter = [0, 5, 0]\nradius = 0.5",
+            ),
+        ];
+        for src in sources {
+            let scene = crate::scene::load_str(&src, "t.toml").expect("scene");
+            let mut settings = RenderSettings::merged(&[&scene.render]);
+            (settings.width, settings.height) = (32, 24);
+            let tracer = CausticTracer::new(&scene, &settings).expect("a tracer");
+            let mut rng = Rng::new(9);
+            let mut checked = 0;
+            for _ in 0..2000 {
+                let e = *tracer.pick_emitter(rng.next_f64());
+                let light = &scene.lights.lights[e.light];
+                let u = (rng.next_f64(), rng.next_f64());
+                let (y0, _, _, area_pdf, _) = emission_point(light, e.region, u).expect("point");
+                let u3 = (rng.next_f64(), rng.next_f64(), rng.next_f64());
+                let Some((w, dir_pdf)) = tracer.emission_direction(y0, u3) else {
+                    continue;
+                };
+                let start = e.pmf * area_pdf * dir_pdf;
+                let camera_side = tracer.light_pdf(e.light as u32, y0, w);
+                assert!(
+                    (camera_side - start).abs() <= 1e-9 * start,
+                    "{src}: light_pdf {camera_side:e} vs start {start:e}"
+                );
+                checked += 1;
+            }
+            assert!(checked > 1000);
         }
     }
 

@@ -60,7 +60,7 @@ impl NaivePath {
             return false;
         };
         let material = scene.material(hit);
-        self.l += self.beta * material.emission;
+        self.l += self.beta * material.emitted(hit.n, self.ray.d);
         if self.depth >= max_depth {
             return false;
         }

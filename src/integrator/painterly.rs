@@ -73,7 +73,7 @@ pub fn radiance(
         let material = scene.material(&hit);
         let prim = &scene.prims[hit.prim as usize];
 
-        if material.is_emissive() {
+        if material.is_emissive() && material.emits_towards(hit.n, ray.d) {
             let weight = match prim.light {
                 // Direct light of a painterly vertex was counted by its light sample alone.
                 Some(_) if prev_painterly && nee => 0.0,

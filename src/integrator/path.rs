@@ -274,7 +274,7 @@ impl PathState {
                     .is_some_and(|light| c.tracer.covers(light, hit.n, ray.d))
             });
         let traced = self.caustic_end && covered;
-        if material.is_emissive() && !traced {
+        if material.is_emissive() && !traced && material.emits_towards(hit.n, ray.d) {
             let weight = if self.specular || !nee {
                 match (connect, self.chains.at_light(), prim.light) {
                     (Some(c), Some(pdf), Some(light)) if covered => {
@@ -808,6 +808,7 @@ mod mis_tests {
             kind: MaterialKind::Diffuse,
             color: DVec3::splat(0.8),
             emission: DVec3::ZERO,
+            one_sided: false,
         }
     }
 

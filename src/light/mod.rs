@@ -45,9 +45,12 @@ impl Light {
             Light::Sphere(l) => {
                 std::f64::consts::PI * l.sphere.area() * luminance(l.emission).max(0.0)
             }
-            // Two-sided: each side emits pi * area * L.
+            // Each face that emits gives pi * area * L.
             Light::Triangle(l) => {
-                2.0 * std::f64::consts::PI * l.triangle.area() * luminance(l.emission).max(0.0)
+                l.sides()
+                    * std::f64::consts::PI
+                    * l.triangle.area()
+                    * luminance(l.emission).max(0.0)
             }
         }
     }

@@ -1,11 +1,10 @@
 //! Triangle lights (quads are two of them), sampled uniformly by area and converted to solid
 //! angle: pdf = dist^2 / (|cos theta_light| * area).
 //!
-//! Emission is two-sided, like every emitter in ptui: the integrators add a surface's emission
-//! whenever a path hits it, from either side (a sphere light is seen from inside as well), so
-//! sampling uses |cos| and covers both sides. A light quad against a ceiling therefore also
-//! "emits" into the ceiling, which only costs the occasional wasted sample; its power for light
-//! selection counts both sides.
+//! A triangle emits from its front face only (the side its vertices wind counter-clockwise
+//! from, where the geometric normal points), as area lights do in pbrt and Mitsuba, unless the
+//! scene says `two_sided = true`. A point behind a one-sided light gets no sample of it, and its
+//! power for light selection counts the sides that emit.
 
 use super::LightSample;
 use crate::geometry::Triangle;
@@ -17,6 +16,8 @@ pub struct TriangleLight {
     pub prim: u32,
     pub triangle: Triangle,
     pub emission: DVec3,
+    /// Whether the back face emits too.
+    pub two_sided: bool,
 }
 
 impl TriangleLight {
@@ -30,7 +31,10 @@ impl TriangleLight {
             return None;
         }
         let wi = to / dist2.sqrt();
-        let cos = wi.dot(n).abs();
+        let cos = self.cos_emitted(wi, n);
+        if cos <= 0.0 {
+            return None;
+        }
         let pdf = dist2 / (cos * self.triangle.area());
         if !(pdf.is_finite() && pdf > 0.0) {
             return None;
@@ -44,6 +48,27 @@ impl TriangleLight {
         })
     }
 
+    /// The cosine at the light of a ray along `wi` arriving where its normal is `n`, if the face
+    /// it arrives at emits; 0 (or less) if not.
+    #[inline]
+    fn cos_emitted(&self, wi: DVec3, n: DVec3) -> f64 {
+        if self.two_sided {
+            wi.dot(n).abs()
+        } else {
+            -wi.dot(n)
+        }
+    }
+
+    /// Emitted power up to the factor pi shared with every light: area x luminance, once per
+    /// face that emits.
+    pub fn sides(&self) -> f64 {
+        if self.two_sided {
+            2.0
+        } else {
+            1.0
+        }
+    }
+
     /// The pdf of [`TriangleLight::sample`] for direction `wi` from `p`: finds the point on the
     /// triangle `wi` points at (0 if it misses).
     pub fn pdf(&self, p: DVec3, wi: DVec3) -> f64 {
@@ -53,7 +78,10 @@ impl TriangleLight {
         let Some(t) = self.triangle.intersect(&Ray::new(p, wi), f64::INFINITY) else {
             return 0.0;
         };
-        let cos = wi.dot(n).abs();
+        let cos = self.cos_emitted(wi, n);
+        if cos <= 0.0 {
+            return 0.0;
+        }
         let pdf = t * t / (cos * self.triangle.area());
         if pdf.is_finite() {
             pdf
@@ -84,6 +112,7 @@ mod tests {
             prim: 0,
             triangle: tri,
             emission: DVec3::ONE,
+            two_sided: true,
         }
     }
 
@@ -139,18 +168,73 @@ mod tests {
         }
     }
 
+    /// A one-sided light samples only points it faces: from in front, the same directions and
+    /// pdfs as the two-sided light; from behind, none, and a pdf of 0 for every direction.
+    #[test]
+    fn a_one_sided_light_is_sampled_from_its_front_only() {
+        let tri = Triangle::new(
+            DVec3::new(-1.0, 2.0, 0.5),
+            DVec3::new(1.5, 2.5, -0.5),
+            DVec3::new(0.0, 3.0, 1.0),
+        );
+        let n = tri.normal().unwrap();
+        let centre = tri.point(1.0 / 3.0, 1.0 / 3.0);
+        let one = TriangleLight {
+            two_sided: false,
+            ..light(tri)
+        };
+        let two = light(tri);
+        assert_eq!(one.sides(), 1.0);
+        assert_eq!(two.sides(), 2.0);
+        let mut rng = Rng::new(3);
+        for (p, front) in [(centre + n * 2.0, true), (centre - n * 2.0, false)] {
+            for _ in 0..1000 {
+                let u = (rng.next_f64(), rng.next_f64());
+                let (s1, s2) = (one.sample(p, u), two.sample(p, u).unwrap());
+                match s1 {
+                    Some(s1) => {
+                        assert!(front);
+                        assert_eq!((s1.wi, s1.pdf), (s2.wi, s2.pdf));
+                        assert!((one.pdf(p, s2.wi) - s2.pdf).abs() <= 1e-9 * s2.pdf);
+                    }
+                    None => {
+                        assert!(!front);
+                        assert_eq!(one.pdf(p, s2.wi), 0.0);
+                        assert!(two.pdf(p, s2.wi) > 0.0);
+                    }
+                }
+            }
+        }
+    }
+
     /// Chi-square test of the sampled directions against the pdf, in a grid over the
     /// (cos theta, phi) square of the sphere of directions, the expected counts integrated
-    /// numerically from `pdf`.
+    /// numerically from `pdf`. Both for a two-sided light seen from behind and for a one-sided
+    /// one (the same triangle wound the other way) seen from its front.
     #[test]
     fn chi_square_directions_match_pdf() {
-        let tri = Triangle::new(
+        let (a, b, c) = (
             DVec3::new(-1.0, -0.5, 1.0),
             DVec3::new(1.2, -0.3, 1.5),
             DVec3::new(0.2, 1.4, 0.6),
         );
-        let l = light(tri);
         let p = DVec3::new(0.1, 0.0, -0.3);
+        let two = light(Triangle::new(a, b, c));
+        let flipped = Triangle::new(a, c, b);
+        assert!(
+            (p - a).dot(flipped.normal().unwrap()) > 0.0,
+            "p must face it"
+        );
+        let one = TriangleLight {
+            two_sided: false,
+            ..light(flipped)
+        };
+        for l in [two, one] {
+            chi_square_against_pdf(&l, p);
+        }
+    }
+
+    fn chi_square_against_pdf(l: &TriangleLight, p: DVec3) {
         let (nc, np) = (24usize, 48usize);
         let samples = 200_000usize;
         let mut rng = Rng::new(23);

@@ -33,6 +33,10 @@ pub struct Material {
     pub color: DVec3,
     /// Emitted radiance, linear RGB.
     pub emission: DVec3,
+    /// Whether only the front face emits (triangles, quads and meshes unless `two_sided = true`:
+    /// the side from which the vertices run counter-clockwise, as in pbrt and Mitsuba). Spheres
+    /// are never one-sided.
+    pub one_sided: bool,
 }
 
 /// A direction chosen by a material.
@@ -62,6 +66,24 @@ pub struct BsdfEval {
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
+    }
+
+    /// Whether a ray along `d` hitting this surface where its geometric normal is `n` sees it
+    /// emit: always for a two-sided emitter, only on the front face (d . n < 0) for a
+    /// one-sided one. A back face still scatters with its colour.
+    #[inline(always)]
+    pub fn emits_towards(&self, n: DVec3, d: DVec3) -> bool {
+        !self.one_sided || d.dot(n) < 0.0
+    }
+
+    /// The radiance a ray along `d` sees emitted where the geometric normal is `n`.
+    #[inline(always)]
+    pub fn emitted(&self, n: DVec3, d: DVec3) -> DVec3 {
+        if self.emits_towards(n, d) {
+            self.emission
+        } else {
+            DVec3::ZERO
+        }
     }
 
     /// True when every lobe is a delta: next-event estimation is useless here.
@@ -202,6 +224,7 @@ mod tests {
                     kind,
                     color,
                     emission: DVec3::ZERO,
+                    one_sided: false,
                 };
                 check(&m, &mut rng);
             }

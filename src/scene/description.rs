@@ -15,7 +15,8 @@
 //!
 //! [[triangle]]
 //! vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]   # front: counter-clockwise
-//! emission = 5
+//! emission = 5             # emits from the front face only...
+//! two_sided = true         # ...unless both faces emit
 //!
 //! [[quad]]                 # parallelogram, two triangles
 //! corner = [213, 548.7, 227]
@@ -85,6 +86,7 @@ pub struct MaterialDesc {
     pub color: Option<Albedo>,
     pub emission: Option<Rgb>,
     pub ior: Option<Spanned<Ior>>,
+    pub two_sided: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -97,6 +99,8 @@ pub struct SphereDesc {
     pub color: Option<Albedo>,
     pub emission: Option<Rgb>,
     pub ior: Option<Spanned<Ior>>,
+    /// Emitters only: whether both faces emit (default: the front face alone).
+    pub two_sided: Option<Spanned<bool>>,
 }
 
 /// Largest magnitude accepted for a coordinate, a length or a radiance. Products of two such
@@ -122,6 +126,8 @@ pub struct TriangleDesc {
     pub color: Option<Albedo>,
     pub emission: Option<Rgb>,
     pub ior: Option<Spanned<Ior>>,
+    /// Emitters only: whether both faces emit (default: the front face alone).
+    pub two_sided: Option<Spanned<bool>>,
 }
 
 /// `[[quad]]`: the parallelogram corner, corner + edge1, corner + edge1 + edge2, corner + edge2
@@ -137,6 +143,8 @@ pub struct QuadDesc {
     pub color: Option<Albedo>,
     pub emission: Option<Rgb>,
     pub ior: Option<Spanned<Ior>>,
+    /// Emitters only: whether both faces emit (default: the front face alone).
+    pub two_sided: Option<Spanned<bool>>,
 }
 
 /// `[[mesh]]`: triangles from a Wavefront OBJ file (`path`, relative to the scene file) or from
@@ -155,6 +163,8 @@ pub struct MeshDesc {
     pub color: Option<Albedo>,
     pub emission: Option<Rgb>,
     pub ior: Option<Spanned<Ior>>,
+    /// Emitters only: whether both faces emit (default: the front face alone).
+    pub two_sided: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize)]
@@ -176,6 +186,7 @@ macro_rules! material_of {
                     color: self.color,
                     emission: self.emission,
                     ior: self.ior.clone(),
+                    two_sided: self.two_sided.clone(),
                 }
             }
         }

@@ -124,8 +124,9 @@ impl Builder<'_> {
         Ok(())
     }
 
-    fn material(&mut self, m: &MaterialDesc, object: &str) -> Result<u32, SceneError> {
-        let material = build_material(m, self.src, self.file, object)?;
+    /// `flat`: a triangle, quad or mesh (whose emission may be one-sided), not a sphere.
+    fn material(&mut self, m: &MaterialDesc, object: &str, flat: bool) -> Result<u32, SceneError> {
+        let material = build_material(m, self.src, self.file, object, flat)?;
         self.materials.push(material);
         Ok(self.materials.len() as u32 - 1)
     }
@@ -144,6 +145,7 @@ impl Builder<'_> {
                         prim,
                         triangle,
                         emission: m.emission,
+                        two_sided: !m.one_sided,
                     }),
                 });
                 Some(self.lights.len() as u32 - 1)
@@ -180,7 +182,7 @@ fn build(
     for (i, s) in desc.sphere.iter().enumerate() {
         let object = format!("sphere[{i}]");
         b.name(&s.name, &object)?;
-        let material = b.material(&s.material(), &object)?;
+        let material = b.material(&s.material(), &object, false)?;
         let sphere = Sphere::new(DVec3::from_array(s.center.0), s.radius.0);
         b.add([Shape::Sphere(sphere)], material);
     }
@@ -196,7 +198,7 @@ fn build(
                 "the vertices are collinear: the triangle has no area",
             ));
         }
-        let material = b.material(&t.material(), &object)?;
+        let material = b.material(&t.material(), &object, true)?;
         b.add([Shape::Triangle(tri)], material);
     }
     for (i, q) in desc.quad.iter().enumerate() {
@@ -218,14 +220,14 @@ fn build(
                 "the edges are parallel (or zero): the quad has no area",
             ));
         }
-        let material = b.material(&q.material(), &object)?;
+        let material = b.material(&q.material(), &object, true)?;
         b.add([Shape::Triangle(t1), Shape::Triangle(t2)], material);
     }
     for (i, m) in desc.mesh.iter().enumerate() {
         let object = format!("mesh[{i}]");
         b.name(&m.name, &object)?;
         let tris = build_mesh(&mut b, m, &object, options)?;
-        let material = b.material(&m.material(), &object)?;
+        let material = b.material(&m.material(), &object, true)?;
         b.add(tris.into_iter().map(Shape::Triangle), material);
     }
 
@@ -245,8 +247,8 @@ fn build(
     let lights = Lights::new(clip_sphere_lights(lights, &prims));
     let mut light_sampling = match lights.len() {
         0 => "off (no emitters)".to_string(),
-        1 => "1 emitter".to_string(),
-        n => format!("{n} emitters, chosen by power"),
+        1 => format!("1 emitter ({})", sidedness(&lights)),
+        n => format!("{n} emitters ({}), chosen by power", sidedness(&lights)),
     };
     let clipped = lights
         .lights
@@ -424,11 +426,36 @@ fn build_camera(desc: &SceneDesc, src: &str, file: &str) -> Result<Camera, Scene
     Ok(Camera::new(position, forward, up, vfov, near))
 }
 
+/// How many of the lights emit from one face, from both, and outwards (spheres), for the summary.
+fn sidedness(lights: &Lights) -> String {
+    let (mut one, mut two, mut spheres) = (0, 0, 0);
+    for l in &lights.lights {
+        match l {
+            Light::Triangle(t) if t.two_sided => two += 1,
+            Light::Triangle(_) => one += 1,
+            Light::Sphere(_) => spheres += 1,
+        }
+    }
+    let mut parts = Vec::new();
+    if one + two > 0 {
+        parts.push(format!("{one} one-sided"));
+        parts.push(format!("{two} two-sided"));
+    }
+    if spheres > 0 {
+        parts.push(format!(
+            "{spheres} sphere{}",
+            if spheres == 1 { "" } else { "s" }
+        ));
+    }
+    parts.join(", ")
+}
+
 fn build_material(
     m: &MaterialDesc,
     src: &str,
     file: &str,
     object: &str,
+    flat: bool,
 ) -> Result<Material, SceneError> {
     let kind_name = m.material.unwrap_or_default();
     let emission = m.emission.map_or(DVec3::ZERO, |e| DVec3::from_array(e.0));
@@ -448,6 +475,26 @@ fn build_material(
             ior: m.ior.as_ref().map_or(DEFAULT_IOR, |i| i.get_ref().0),
         },
     };
+    if let Some(two_sided) = &m.two_sided {
+        let problem = if !flat {
+            Some("`two_sided` applies to triangles, quads and meshes: a sphere emits outwards")
+        } else if emission.max_element() <= 0.0 {
+            Some("`two_sided` only applies to emitters (objects with an `emission`)")
+        } else {
+            None
+        };
+        if let Some(problem) = problem {
+            return Err(SceneError::at(
+                file,
+                src,
+                Some(two_sided.span()),
+                Some(format!("{object}.two_sided")),
+                problem,
+            ));
+        }
+    }
+    // Flat emitters emit from their front face alone unless asked, as in pbrt and Mitsuba.
+    let one_sided = flat && !m.two_sided.as_ref().is_some_and(|t| *t.get_ref());
     if let (Some(ior), false) = (&m.ior, kind_name == MaterialName::Glass) {
         return Err(SceneError::at(
             file,
@@ -461,6 +508,7 @@ fn build_material(
         kind,
         color,
         emission,
+        one_sided,
     })
 }
 
