@@ -1,7 +1,7 @@
 //! Adaptive sampling: after a pilot of uniform passes, every pixel takes a fixed number of samples
-//! per pass, more where its neighbourhood is noisy, so the pixels that carry the image's error
-//! (cornell: the floor's caustic seen through the glass ball, the halo by the lamp; the worst 5%
-//! of pixels hold 70-84% of the squared error) get the time.
+//! per pass, more where its neighbourhood is noisy, so the few pixels that carry most of the
+//! image's error (cornell: the floor's caustic seen through the glass ball, the halo by the
+//! lamp; benches/HISTORY.md#adaptive-sampling) get the time.
 //!
 //! Unbiased by construction: a pixel's sample count is fixed once, from its *neighbours'* pilot
 //! samples, never its own, so the count is independent of the values it averages and the mean of
@@ -76,8 +76,7 @@ pub struct SampleMap {
 /// What the map is built from: per pixel, the variance of one sample (Welford's, summed over the
 /// channels). For Sobol samples it overstates the error of smooth pixels, and the half-buffer
 /// variance would not; but after 16 passes that has one noisy degree of freedom per pixel, and
-/// cornell measured better with Welford's (MSE x rays at 96 spp: 0.000071 vs 0.000074, uniform
-/// 0.000080).
+/// cornell measured better with Welford's (benches/HISTORY.md#adaptive-sampling).
 fn per_sample_variance(film: &Film, i: usize) -> f32 {
     let s = film.variance_of_mean(i).element_sum() * film.count(i) as f64;
     if s.is_finite() {

@@ -1,6 +1,6 @@
 //! ptui: a physically based path tracer that lives in the terminal.
 //!
-//! Data flows one way (see the README's architecture section):
+//! Data flows one way (see docs/ARCHITECTURE.md):
 //! scene file → [`scene::description`] → validated, immutable [`scene::Scene`] →
 //! [`render::Renderer`] (progressive passes on a rayon pool) → [`film::Film`] →
 //! snapshot → preview, PNG/EXR writer, convergence report.

@@ -68,8 +68,8 @@ pub const SIGNED_AXES: [DVec3; 6] = [
 
 /// `if cond { x } else { y }` without a branch, by masking the bits. Where `cond` is a coin toss
 /// per sample (a quadrant, which side of a diagonal), a mispredicted branch costs more than
-/// computing both values (callgrind's branch simulator counted ~23 mispredictions per camera
-/// sample on cornell). `std::hint::select_unpredictable` compiles to a branch here for f64 in
+/// computing both values (benches/HISTORY.md#branch-free-selects).
+/// `std::hint::select_unpredictable` compiles to a branch here for f64 in
 /// the baseline x86-64 build (no blend instruction); this does not.
 #[inline(always)]
 pub fn select(cond: bool, x: f64, y: f64) -> f64 {

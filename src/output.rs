@@ -123,7 +123,8 @@ fn encode_pixels(
 /// The PNG branch of [`encode_pixels`]: rows tonemapped and compressed one at a time, with the
 /// settings of image's `PngEncoder` by default (fast compression, adaptive filter: how `ptui`
 /// first wrote its PNGs), so a 3840x2160 save holds one row of 8-bit pixels, not the image's
-/// 25 MB. (The streamed file is about 1% larger: the same pixels, compressed in pieces.)
+/// 25 MB. (The streamed file is slightly larger: the same pixels, compressed in pieces;
+/// benches/HISTORY.md#png-streaming.)
 fn encode_png(
     w: &mut impl Write,
     (width, height): (u32, u32),

@@ -1,5 +1,5 @@
 #!/bin/sh
-# Renders the painterly pictures of the README into docs/painterly/ (from the repository root):
+# Renders the painterly pictures of docs/SCENES.md into docs/painterly/ (from the repository root):
 #   sh docs/painterly/render.sh
 # Every picture is one `ptui render` command; seeds are the default (0), so reruns are identical.
 set -e

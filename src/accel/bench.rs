@@ -1,6 +1,7 @@
 //! The measurement behind [`super::BVH_CROSSOVER`]: closest-hit throughput of the flat scan and
 //! of the BVH as the primitive count grows, on random scenes of spheres and triangles (half each)
-//! and random rays. The flat scan is the renderer's ([`FlatScan`]: spheres four at a time). Shared by `ptui bench accel`, `cargo bench --bench accel` and the tests.
+//! and random rays. The flat scan is the renderer's ([`FlatScan`]: spheres eight at a time).
+//! Shared by `ptui bench accel`, `cargo bench --bench accel` and the tests.
 
 use super::{flat::FlatScan, Bvh};
 use crate::geometry::{Sphere, Triangle};

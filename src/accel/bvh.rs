@@ -17,9 +17,8 @@ use std::time::{Duration, Instant};
 const BUCKETS: usize = 16;
 /// A leaf never holds more primitives than this, unless they cannot be separated at all.
 const MAX_LEAF: usize = 4;
-/// Cost of a traversal step (a box test) relative to one primitive test. Measured on the
-/// torus-knot scene (1 thread): 1 renders 25% faster than pbrt's 1/2 (fewer, fuller leaves:
-/// 157k nodes instead of 216k for 131k triangles); 2 is no faster than 1.
+/// Cost of a traversal step (a box test) relative to one primitive test: 1 gives fewer, fuller
+/// leaves than pbrt's 1/2 and renders torus-knot faster (benches/HISTORY.md#bvh-traversal-cost).
 const TRAVERSAL_COST: f64 = 1.0;
 /// Below this depth splits follow the SAH; deeper, the median split by count guarantees that
 /// the tree (and the traversal stack) stays shallow even for adversarial inputs.
@@ -29,8 +28,8 @@ const STACK: usize = 96;
 
 #[derive(Clone, Copy, Debug)]
 struct Node {
-    /// The box's corners as arrays: as `DVec3`s (padded to 32 bytes) a node took 96 bytes, not
-    /// 64, and torus-knot ran 8% slower.
+    /// The box's corners as arrays: as `DVec3`s (padded to 32 bytes) a node would take 96 bytes,
+    /// not 64, which slowed torus-knot (benches/HISTORY.md#bvh-node-size).
     corners: [[f64; 3]; 2],
     /// Leaf: first index into `order`. Interior: index of the second child (the first child is
     /// the next node).

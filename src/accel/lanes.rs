@@ -1,8 +1,7 @@
 //! Spheres in structure-of-arrays form, tested eight at a time with straight-line code the
 //! compiler vectorises: run-time dispatch to an AVX-512 build (one 8-wide f64 operation per
 //! step) or an AVX2 build (two 4-wide), else the baseline SSE2 code; no `target-cpu` needed.
-//! Measured on cornell's nine spheres, 2 threads, alternating: 4 lanes with AVX2 1.61-1.63 M
-//! samples/s, 8 lanes with AVX2 1.64-1.68, 8 lanes with AVX-512 1.70-1.72. Same arithmetic, in
+//! Eight lanes beat four even in AVX2 (benches/HISTORY.md#sphere-lanes). Same arithmetic, in
 //! the same order, as [`Sphere::intersect`], so the roots are bit-identical to the scalar test.
 
 use crate::math::{DVec3, Ray};
@@ -53,9 +52,9 @@ pub struct RayBatch {
     /// The rays, [`LANES`] a group, each component in its own column. A push writes each
     /// number straight into its column, read one at a time from the ray: the rays used to be
     /// kept whole and spread into columns before each test, and copying a ray whole read it back
-    /// with wide loads from narrower stores still in flight, which stalled (~5% of a cornell
-    /// profile on the pushes). Groups past the used ones are spare capacity; lanes past `len`
-    /// in the last used group hold stale rays, tested but never read.
+    /// with wide loads from narrower stores still in flight, which stalled
+    /// (benches/HISTORY.md#sphere-lanes). Groups past the used ones are spare capacity; lanes
+    /// past `len` in the last used group hold stale rays, tested but never read.
     groups: Vec<RayGroup>,
     /// Distance to the closest hit of each ray (t_max when none); padded to whole groups.
     pub t: Vec<f64>,
@@ -253,7 +252,7 @@ impl SphereLanes {
                     f64::INFINITY
                 };
             }
-            // A measured 20% faster than lane-wise blends followed by a final reduction.
+            // Faster than lane-wise blends and a final reduction (benches/HISTORY.md#sphere-lanes).
             for (tk, prim) in t.iter().zip(&self.prim[g]) {
                 if *tk < best {
                     best = *tk;
@@ -334,13 +333,11 @@ impl SphereLanes {
                 if !disc.iter().any(|d| *d >= 0.0) {
                     continue;
                 }
-                // Written so that each ray's closest hit stays in registers: choosing between
-                // `s.prim` and `best_prim[k]` as two loads, LLVM selected between their
-                // addresses and gathered through them (`vpgatherqq`, 4% of a cornell render's
-                // samples on the instruction after it), and a distance kept only where closer
-                // became a masked store the next sphere's load could not forward from
-                // (`vmaskmovpd` in AVX2). The minimum gives the same bits: `cand` is never NaN
-                // and ties are equal values.
+                // Written so that each ray's closest hit stays in registers: a choice between
+                // `s.prim` and `best_prim[k]` as two loads became a gather (`vpgatherqq`), and a
+                // distance kept only where closer a masked store the next sphere's load could not
+                // forward from (benches/HISTORY.md#sphere-lanes). The minimum gives the same
+                // bits: `cand` is never NaN and ties are equal values.
                 let prim = s.prim;
                 for k in 0..LANES {
                     let (fx, fy, fz, b, disc) = (fx[k], fy[k], fz[k], b[k], disc[k]);

@@ -33,12 +33,10 @@ pub fn camera_probe(camera: &Camera, nx: u32, ny: u32) -> Vec<Ray> {
         .collect()
 }
 
-/// Primitive count from which `auto` builds a BVH. Measured with `ptui bench accel` on the
-/// development machine (random spheres and triangles, see `accel::bench`; table in the README):
-/// at a single primitive the two tie within the noise (flat 29-49 ns, BVH 28-76 ns per ray over
-/// four runs), from 2 on the BVH wins in every run (1.6x to 2.6x), because its root box already
-/// rejects rays that miss everything.
-/// Scenes whose boxes cannot separate their objects are caught by the SAH check instead.
+/// Primitive count from which `auto` builds a BVH: from 2 on the BVH wins in every run of
+/// `ptui bench accel`, because its root box already rejects rays that miss everything; at 1 the
+/// two tie (benches/HISTORY.md#accelerator-crossover). Scenes whose boxes cannot separate their
+/// objects are caught by the camera-ray check instead.
 pub const BVH_CROSSOVER: usize = 2;
 
 /// Which accelerator the scene asks for.

@@ -206,10 +206,9 @@ pub fn run(source: &Source, options: &Options) -> Result<Outcome, CheckError> {
         caustics: Some(crate::settings::Caustics::Path),
         // Their limits were set for one sample per pixel and pass. Adaptive sampling's extra
         // samples sharpen them past what the invariance scenes can meet: `walls-1e6` lets 0.6%
-        // more light past its flatter ceiling (its image mean minus cornell's, seeds 0, 3, 7:
-        // +0.0049, +0.0017, -0.0004 uniform; +0.0047, +0.0021, +0.0018 adaptive), which seed 0
-        // puts at z 2.6 with uniform passes and 3.4 (limit 3.26) with adaptive ones. Adaptive
-        // sampling has its own test against the reference (tests/reference.rs).
+        // more light past its flatter ceiling, a real difference adaptive sampling resolves
+        // (benches/HISTORY.md#checks-without-adaptive-sampling). Adaptive sampling has its own
+        // test against the reference (tests/reference.rs).
         adaptive: Some(false),
         ..Default::default()
     };

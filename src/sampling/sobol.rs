@@ -130,7 +130,8 @@ impl PaddedSobol {
         let x = laine_karras(shuffled, h2 as u32);
         // owen_scramble(sobol(i)) = reverse(LK(reverse(sobol(i)))), the inner reversal tabled.
         let y = laine_karras(apply(&SOBOL_DIM1_REV_BYTES, shuffled), (h2 >> 32) as u32);
-        // Both outer reversals in one (x86 has none in hardware, and each took ~13 instructions):
+        // Both outer reversals in one (x86 has no bit-reverse instruction; see
+        // benches/HISTORY.md#sobol-draws):
         // reversing y:x as a u64 leaves reverse(x) in the high half and reverse(y) in the low.
         let both = ((y as u64) << 32 | x as u64).reverse_bits();
         (
@@ -163,7 +164,7 @@ impl PaddedSobol {
 
     /// Dimension `dim` as an independent uniform number, outside the sequence: one hash of
     /// (pixel, replicate, sample, dim) instead of the scrambled point's three hashes and two bit
-    /// reversals (~15 instructions instead of ~100). For numbers stratification does nothing
+    /// reversals (benches/HISTORY.md#sobol-draws). For numbers stratification does nothing
     /// for. The hash's input is one-to-one in (dim, sample): dim x an odd constant fixes the low
     /// 32 bits, the reversed sample index only the high ones.
     #[inline(always)]

@@ -5,7 +5,7 @@ use crate::math::{select, DVec3};
 use std::f64::consts::{FRAC_1_PI, PI};
 
 /// (sin x, cos x) for |x| <= pi/4 by Taylor polynomials to degree 13/14: error below 3e-14,
-/// and about four times cheaper than libm's `sincos`, which was 10% of a cornell render. The
+/// and much cheaper than libm's `sincos` (benches/HISTORY.md#warps). The
 /// polynomials in x^2 are evaluated by Estrin's scheme: pairs of terms side by side, so the
 /// chain of dependent multiplies and adds is 5 long instead of Horner's 14 (the samplers' warps
 /// sit on every path's critical path).
@@ -36,8 +36,7 @@ pub fn sin_cos_turn(u: f64) -> (f64, f64) {
     let (s, c) = sin_cos_eighth(2.0 * PI * (u - 0.25 * k));
     // Quadrant q turns (s, c) into (s, c), (c, -s), (-s, -c), (-c, s): chosen by selects and
     // sign-bit flips (what negation is) rather than a match, which compiled to a jump table
-    // that a random quadrant sends the wrong way 3 times in 4 (44% of a cornell render's
-    // mispredicted indirect branches, callgrind's branch simulator).
+    // that a random quadrant sends the wrong way 3 times in 4 (benches/HISTORY.md#warps).
     let q = k as i64 as u64 & 3;
     let odd = q & 1 != 0;
     let (a, b) = (select(odd, c, s), select(odd, s, c));
