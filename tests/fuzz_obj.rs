@@ -152,17 +152,20 @@ fn temp_obj(text: &str, case: u64) -> tempfile::NamedTempFile {
 fn check(text: &str, case: u64) -> Result<(), TestCaseError> {
     let file = temp_obj(text, case);
     let path = file.path();
-    let loaded = mesh::load_obj(path, 10_000);
+    let loaded = mesh::load_obj(path, 10_000, None);
     match &loaded {
-        Ok(tris) => {
-            for t in tris {
+        Ok(m) => {
+            for t in &m.triangles {
                 prop_assert!(
                     t.p().iter().all(|v| v.is_finite()),
                     "non-finite vertex {t:?}"
                 );
             }
         }
-        Err(msg) => prop_assert!(!msg.is_empty()),
+        Err(msg) => {
+            // Every refusal names the file, and the line where one is to blame.
+            prop_assert!(msg.contains(&path.display().to_string()), "{msg}");
+        }
     }
     let scene_src = format!(
         "[camera]\nposition = [0.5, 0.5, 4]\n\n[[mesh]]\npath = {:?}\n\n[[sphere]]\ncenter = [0, 5, 5]\nradius = 1\nemission = 5\n",
@@ -212,8 +215,14 @@ fn next_case() -> u64 {
 fn the_unmutated_cube_loads() {
     let file = temp_obj(CUBE, u64::MAX);
     let path = file.path();
-    let tris = mesh::load_obj(path, 100).expect("valid cube");
-    assert_eq!(tris.len(), 12);
+    let m = mesh::load_obj(path, 100, None).expect("valid cube");
+    assert_eq!(m.triangles.len(), 12);
+    assert_eq!(
+        m.warnings.len(),
+        1,
+        "one warning for mtllib / usemtl: {:?}",
+        m.warnings
+    );
 }
 
 proptest! {
