@@ -206,7 +206,7 @@ fn diffuse_about_a_shading_normal(name: &str, wo: DVec3) {
         0.0,
         25f64.to_radians().cos(),
     ));
-    let nn = Normals { g, s: tilt };
+    let nn = Normals::new(g, tilt);
     let wo = Frame::from_normal(g).to_world(wo.normalize());
     assert!(wo.dot(g) > 0.0);
     chi2_test_with(

@@ -34,6 +34,9 @@ pub struct Hit {
     /// Barycentrics (b1, b2) of p1 and p2 on a triangle (0 on spheres), for interpolating
     /// vertex normals once the scene knows the triangle has them.
     pub uv: [f32; 2],
+    /// Whether `ns` differs from `n` (a flag in the record's padding: flat surfaces skip the
+    /// shading-normal code on one test rather than a vector comparison).
+    pub smooth: bool,
 }
 
 impl Hit {
@@ -43,6 +46,7 @@ impl Hit {
         Normals {
             g: self.n,
             s: self.ns,
+            smooth: self.smooth,
         }
     }
 }
@@ -53,19 +57,35 @@ impl Hit {
 pub struct Normals {
     pub g: DVec3,
     pub s: DVec3,
+    /// s != g; see [`Normals::new`].
+    smooth: bool,
 }
 
 impl Normals {
     /// A flat surface: the shading normal is the geometric one.
     #[inline(always)]
     pub fn flat(n: DVec3) -> Self {
-        Normals { g: n, s: n }
+        Normals {
+            g: n,
+            s: n,
+            smooth: false,
+        }
+    }
+
+    /// Geometric normal `g` and shading normal `s` (unit, s . g > 0).
+    #[inline(always)]
+    pub fn new(g: DVec3, s: DVec3) -> Self {
+        Normals {
+            g,
+            s,
+            smooth: s != g,
+        }
     }
 
     /// Whether the shading normal differs from the geometric one.
     #[inline(always)]
     pub fn smooth(&self) -> bool {
-        self.s != self.g
+        self.smooth
     }
 
     /// Veach's adjoint correction for importance transport (light paths) at a shading normal

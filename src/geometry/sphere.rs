@@ -89,6 +89,7 @@ impl Sphere {
             prim,
             err,
             ns: n,
+            smooth: false,
             uv: [0.0; 2],
         }
     }

@@ -177,6 +177,7 @@ impl Triangle {
                     prim,
                     err,
                     ns: n,
+                    smooth: false,
                     uv: [b1 as f32, b2 as f32],
                 }
             }
@@ -192,6 +193,7 @@ impl Triangle {
                     prim,
                     err,
                     ns: n,
+                    smooth: false,
                     uv: [1.0 / 3.0; 2],
                 }
             }

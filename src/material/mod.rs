@@ -177,7 +177,7 @@ impl Material {
     /// about the geometric normal, which makes the weight cos_s(wo) / |cos_g wo| times the colour
     /// and covers every wi the adjoint reaches (about the shading normal, wi behind it would be
     /// missed); delta lobes take pbrt's factor [`Normals::adjoint`].
-    #[inline]
+    #[inline(always)]
     pub fn sample_adjoint(
         &self,
         wo: DVec3,
@@ -211,7 +211,7 @@ impl Material {
     /// f*(wo, wi) |cos_g wi| for importance transport (`wo` towards the light): [`Material::eval`]'s
     /// f cos on flat surfaces, and at a shading normal the radiance BSDF read from the camera's
     /// end, f(wi, wo) cos_s(wo) |cos_g wi| / |cos_g wo|.
-    #[inline]
+    #[inline(always)]
     pub fn eval_adjoint(&self, wo: DVec3, wi: DVec3, nn: Normals) -> DVec3 {
         if !nn.smooth() {
             return self.eval(wo, wi, nn).f_cos;
@@ -380,10 +380,7 @@ mod tests {
         let a = rng.next_f64() * 60f64.to_radians();
         let phi = rng.next_f64() * std::f64::consts::TAU;
         let local = DVec3::new(a.sin() * phi.cos(), a.sin() * phi.sin(), a.cos());
-        Normals {
-            g,
-            s: Frame::from_normal(g).to_world(local),
-        }
+        Normals::new(g, Frame::from_normal(g).to_world(local))
     }
 
     /// With a shading normal no sampled or evaluated direction crosses the geometric surface
