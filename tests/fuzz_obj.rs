@@ -68,6 +68,22 @@ const LINES: &[&str] = &[
     "# comment",
     "",
     "\u{0}\u{ff}garbage",
+    // What exporters write besides: n-gons, w and vertex colours, relative normals, zero and
+    // NaN normals, smoothing groups, continued lines, free-form statements.
+    "f 1 2 3 4 5 6",
+    "f -1//-1 -2//-1 -3//-1 -4//-1",
+    "f 1/1/1 2/1/1 3/1/1",
+    "v 1 2 3 1",
+    "v 0.1 0.2 0.3 1 0 0",
+    "vn 0 0 0",
+    "vn nan 0 1",
+    "vn 0 1",
+    "s 1",
+    "g a b",
+    "mtllib a.mtl b.mtl",
+    "v 1 2 \\",
+    "cstype bspline",
+    "f 1//99 2//1 3//1",
 ];
 
 #[derive(Clone, Debug)]
@@ -152,17 +168,32 @@ fn temp_obj(text: &str, case: u64) -> tempfile::NamedTempFile {
 fn check(text: &str, case: u64) -> Result<(), TestCaseError> {
     let file = temp_obj(text, case);
     let path = file.path();
-    let loaded = mesh::load_obj(path, 10_000);
+    let loaded = mesh::load_obj(path, 10_000, None);
     match &loaded {
-        Ok(tris) => {
-            for t in tris {
+        Ok(m) => {
+            for t in &m.triangles {
                 prop_assert!(
                     t.p().iter().all(|v| v.is_finite()),
                     "non-finite vertex {t:?}"
                 );
             }
         }
-        Err(msg) => prop_assert!(!msg.is_empty()),
+        Err(msg) => {
+            // Every refusal names the file, and the line where one is to blame (all but an
+            // empty file and one over the triangle limit).
+            let shown = path.display().to_string();
+            prop_assert!(msg.contains(&shown), "{msg}");
+            if !msg.contains("no faces") && !msg.contains("more than") {
+                let rest = &msg[msg.find(&shown).unwrap_or(0) + shown.len()..];
+                let line = rest
+                    .strip_prefix(':')
+                    .map(|r| r.split(':').next().unwrap_or(""));
+                prop_assert!(
+                    line.is_some_and(|l| l.parse::<usize>().is_ok()),
+                    "no file:line in {msg}"
+                );
+            }
+        }
     }
     let scene_src = format!(
         "[camera]\nposition = [0.5, 0.5, 4]\n\n[[mesh]]\npath = {:?}\n\n[[sphere]]\ncenter = [0, 5, 5]\nradius = 1\nemission = 5\n",
@@ -212,8 +243,14 @@ fn next_case() -> u64 {
 fn the_unmutated_cube_loads() {
     let file = temp_obj(CUBE, u64::MAX);
     let path = file.path();
-    let tris = mesh::load_obj(path, 100).expect("valid cube");
-    assert_eq!(tris.len(), 12);
+    let m = mesh::load_obj(path, 100, None).expect("valid cube");
+    assert_eq!(m.triangles.len(), 12);
+    assert_eq!(
+        m.warnings.len(),
+        1,
+        "one warning for mtllib / usemtl: {:?}",
+        m.warnings
+    );
 }
 
 proptest! {

@@ -80,9 +80,22 @@ fn obj_errors_name_the_file_and_the_problem() {
         .to_string();
     assert!(text.contains("directory"), "{text}");
     let malformed = obj_error("malformed", Some("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 x 3\n"));
-    assert!(malformed.contains("invalid OBJ"), "{malformed}");
+    assert!(
+        malformed.contains("m.obj:4:") && malformed.contains("not a vertex index"),
+        "{malformed}"
+    );
     let range = obj_error("range", Some("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n"));
-    assert!(range.contains("out of bounds"), "{range}");
+    assert!(
+        range.contains("m.obj:4:") && range.contains("out of range"),
+        "{range}"
+    );
+    let nan = obj_error("nan", Some("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n"));
+    assert!(nan.contains("m.obj:3:") && nan.contains("finite"), "{nan}");
+    let cut = obj_error("cut", Some("v 0 0 0\nv 1 0 0\nv 0 1\nf 1 2 3\n"));
+    assert!(
+        cut.contains("m.obj:3:") && cut.contains("truncated"),
+        "{cut}"
+    );
     let empty = obj_error("empty", Some("v 0 0 0\n"));
     assert!(empty.contains("no faces"), "{empty}");
 }

@@ -28,6 +28,89 @@ pub struct Hit {
     pub prim: u32,
     /// Absolute bound on the rounding error of each coordinate of `p`.
     pub err: f64,
+    /// Shading unit normal: interpolated from a mesh's vertex normals, on the side of `n`; `n`
+    /// itself on flat surfaces. The BSDF's frame; `n` still decides sides and ray offsets.
+    pub ns: DVec3,
+    /// Barycentrics (b1, b2) of p1 and p2 on a triangle (0 on spheres), for interpolating
+    /// vertex normals once the scene knows the triangle has them.
+    pub uv: [f32; 2],
+    /// Whether `ns` differs from `n` (a flag in the record's padding: flat surfaces skip the
+    /// shading-normal code on one test rather than a vector comparison).
+    pub smooth: bool,
+}
+
+impl Hit {
+    /// The geometric and shading normals, for the BSDF.
+    #[inline(always)]
+    pub fn normals(&self) -> Normals {
+        Normals {
+            g: self.n,
+            s: self.ns,
+            smooth: self.smooth,
+        }
+    }
+}
+
+/// The two normals a BSDF needs: geometric `g` (which side a direction is on) and shading `s`
+/// (the frame of the lobes), with s . g > 0. Flat surfaces have s == g.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Normals {
+    pub g: DVec3,
+    pub s: DVec3,
+    /// s != g; see [`Normals::new`].
+    smooth: bool,
+}
+
+impl Normals {
+    /// A flat surface: the shading normal is the geometric one.
+    #[inline(always)]
+    pub fn flat(n: DVec3) -> Self {
+        Normals {
+            g: n,
+            s: n,
+            smooth: false,
+        }
+    }
+
+    /// Geometric normal `g` and shading normal `s` (unit, s . g > 0).
+    #[inline(always)]
+    pub fn new(g: DVec3, s: DVec3) -> Self {
+        Normals {
+            g,
+            s,
+            smooth: s != g,
+        }
+    }
+
+    /// Whether the shading normal differs from the geometric one.
+    #[inline(always)]
+    pub fn smooth(&self) -> bool {
+        self.smooth
+    }
+
+    /// Veach's adjoint correction for importance transport (light paths) at a shading normal
+    /// (pbrt's `CorrectShadingNormal`): the radiance BSDF f(wi, wo) cos_s(wo)/|wo.g| seen from
+    /// the other end, times |wi.g|, over the f cos_s(wi) that `Material::eval` / `sample`
+    /// give. Here wo is the light's side and wi the camera's. 1 on flat surfaces.
+    /// cos_s is clamped at 0 as the BSDF's (zero behind the shading normal on `wo`'s side).
+    #[inline]
+    pub fn adjoint(&self, wo: DVec3, wi: DVec3) -> f64 {
+        if !self.smooth() {
+            return 1.0;
+        }
+        let side = if wo.dot(self.g) >= 0.0 {
+            self.s
+        } else {
+            -self.s
+        };
+        let num = wo.dot(side).max(0.0) * wi.dot(self.g).abs();
+        let den = wo.dot(self.g).abs() * wi.dot(side).max(0.0);
+        if den > 0.0 && num.is_finite() {
+            num / den
+        } else {
+            0.0
+        }
+    }
 }
 
 /// How many error bounds a spawned origin sits off the surface. The bounds are already

@@ -82,7 +82,16 @@ impl Sphere {
         // Reprojecting onto the surface bounds the point's error by the centre and radius alone.
         let p = self.center + n * self.radius;
         let err = self.error_bound();
-        Hit { t, p, n, prim, err }
+        Hit {
+            t,
+            p,
+            n,
+            prim,
+            err,
+            ns: n,
+            smooth: false,
+            uv: [0.0; 2],
+        }
     }
 
     pub fn bounds(&self) -> Aabb {

@@ -38,11 +38,18 @@ impl TorusKnot {
 
     /// The tube's triangles.
     pub fn triangles(&self) -> Vec<Triangle> {
+        self.triangles_and_normals().0
+    }
+
+    /// The tube's triangles and, for each, the exact surface normals at its three corners: a
+    /// tube of constant radius around a curve (a canal surface) has the unit normal
+    /// (x - c(t)) / tube at the point x of the ring around c(t).
+    pub fn triangles_and_normals(&self) -> (Vec<Triangle>, Vec<[[f32; 3]; 3]>) {
         let (n, m) = (self.segments.max(3) as usize, self.sides.max(3) as usize);
         // Ring i: a circle around c(t_i) in the plane normal to the tangent. The frame comes
         // from the tangent and the direction to the curve point from the knot's axis (never
         // parallel to the tangent for these knots), so rings do not twist abruptly.
-        let ring = |i: usize| -> Vec<DVec3> {
+        let ring = |i: usize| -> Vec<(DVec3, DVec3)> {
             let t = TAU * i as f64 / n as f64;
             let c = self.centre(t);
             let h = 1e-5;
@@ -53,23 +60,28 @@ impl TorusKnot {
             (0..m)
                 .map(|j| {
                     let s = TAU * j as f64 / m as f64;
-                    c + (nrm * s.cos() + b * s.sin()) * self.tube
+                    let out = nrm * s.cos() + b * s.sin();
+                    (c + out * self.tube, out)
                 })
                 .collect()
         };
-        let rings: Vec<Vec<DVec3>> = (0..n).map(ring).collect();
+        let rings: Vec<Vec<(DVec3, DVec3)>> = (0..n).map(ring).collect();
         let mut tris = Vec::with_capacity(2 * n * m);
+        let mut normals = Vec::with_capacity(2 * n * m);
+        let f32s = |v: DVec3| v.as_vec3().to_array();
         for i in 0..n {
             let (a, b) = (&rings[i], &rings[(i + 1) % n]);
             for j in 0..m {
                 let k = (j + 1) % m;
                 // Counter-clockwise seen from outside: with T along the tube and B around it,
                 // (T + B) x T and B x (T + B) both point away from the centre line.
-                tris.push(Triangle::new(a[j], b[k], b[j]));
-                tris.push(Triangle::new(a[j], a[k], b[k]));
+                for [(p0, n0), (p1, n1), (p2, n2)] in [[a[j], b[k], b[j]], [a[j], a[k], b[k]]] {
+                    tris.push(Triangle::new(p0, p1, p2));
+                    normals.push([f32s(n0), f32s(n1), f32s(n2)]);
+                }
             }
         }
-        tris
+        (tris, normals)
     }
 }
 
@@ -95,6 +107,37 @@ mod tests {
             let centroid = (p0 + p1 + p2) / 3.0;
             let n = t.normal().expect("no degenerate triangles");
             assert!(n.dot(centroid - c) > 0.0, "triangle {idx} faces inwards");
+        }
+    }
+
+    /// The corner normals are unit, point out of the tube like the faces around them, and are
+    /// the direction from the centre line to the corner (so a finer tube's faces converge on
+    /// them).
+    #[test]
+    fn corner_normals_are_the_tube_radial_directions() {
+        let knot = TorusKnot {
+            p: 3,
+            q: 2,
+            segments: 96,
+            sides: 12,
+            tube: 0.4,
+        };
+        let (tris, normals) = knot.triangles_and_normals();
+        assert_eq!(tris.len(), normals.len());
+        for (t, ns) in tris.iter().zip(&normals) {
+            let g = t.normal().expect("no degenerate triangles");
+            for (p, n) in t.p().iter().zip(ns) {
+                let n = DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+                assert!((n.length() - 1.0).abs() < 1e-6);
+                assert!(n.dot(g) > 0.5, "a corner normal faces away from its face");
+                // The centre of the ring through p lies `tube` behind it along n (up to the
+                // normal's f32 rounding).
+                let c = *p - n * knot.tube;
+                let nearest = (0..96)
+                    .map(|i| (knot.centre(TAU * i as f64 / 96.0) - c).length())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(nearest < 1e-6, "{nearest}");
+            }
         }
     }
 }

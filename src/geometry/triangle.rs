@@ -170,14 +170,32 @@ impl Triangle {
                 let p = p0 * b0 + p1 * b1 + p2 * b2;
                 let abs_sum = (p0 * b0).abs() + (p1 * b1).abs() + (p2 * b2).abs();
                 let err = gamma(7.0) * abs_sum.max_element();
-                Hit { t, p, n, prim, err }
+                Hit {
+                    t,
+                    p,
+                    n,
+                    prim,
+                    err,
+                    ns: n,
+                    smooth: false,
+                    uv: [b1 as f32, b2 as f32],
+                }
             }
             None => {
                 // Unreachable for a t returned by `intersect`; stay safe with a looser bound
                 // (error of o + t d: a few ulps of |o| + t).
                 let p = ray.at(t);
                 let err = gamma(7.0) * (p.abs().max_element() + t);
-                Hit { t, p, n, prim, err }
+                Hit {
+                    t,
+                    p,
+                    n,
+                    prim,
+                    err,
+                    ns: n,
+                    smooth: false,
+                    uv: [1.0 / 3.0; 2],
+                }
             }
         }
     }

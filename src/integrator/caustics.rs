@@ -562,7 +562,9 @@ impl CausticTracer {
             large: large_passes(light_paths),
             pixel_norm: pixel_area * light_paths as f64,
             pilot_rate: 0.0,
-            connect: settings.caustics == Caustics::Light,
+            // Joins would need y's shading normal in the stored vertex: scenes with vertex
+            // normals keep the light paths' direct splats only.
+            connect: settings.caustics == Caustics::Light && !scene.has_shading_normals(),
             connect_threshold: 0.0,
         };
         // A fixed-seed pilot, before any sample is taken: the choice does not depend on the
@@ -798,7 +800,10 @@ impl CausticTracer {
                     return;
                 }
             }
-            let Some(bs) = m.sample(wo, hit.n, rng.next_f64(), (rng.next_f64(), rng.next_f64()))
+            let nn = hit.normals();
+            // Light carries importance: at a shading normal, the adjoint BSDF's sample.
+            let Some(bs) =
+                m.sample_adjoint(wo, nn, rng.next_f64(), (rng.next_f64(), rng.next_f64()))
             else {
                 return;
             };
@@ -807,7 +812,7 @@ impl CausticTracer {
                 side.specular(cos_in, cos_out);
                 run += 1;
             } else {
-                side.leave_y(cos_in, bs.pdf, m.eval(bs.wi, wo, hit.n).pdf, cos_out);
+                side.leave_y(cos_in, bs.pdf, m.eval(bs.wi, wo, nn).pdf, cos_out);
                 run = 0;
             }
             // Light carries importance, for which radiance's compression across a refraction
@@ -846,8 +851,10 @@ impl CausticTracer {
         };
         let cos_c = d.dot(cam.forward);
         let wi = -d;
-        let e = scene.material(hit).eval(wo, wi, hit.n);
-        if e.f_cos.max_element() <= 0.0 {
+        // Importance transport: at a shading normal, the adjoint BSDF (f cos as ever on flat
+        // surfaces).
+        let f_cos = scene.material(hit).eval_adjoint(wo, wi, hit.normals());
+        if f_cos.max_element() <= 0.0 {
             return;
         }
         // Visible if nothing lies between the hit and where camera rays start (`near`).
@@ -859,7 +866,7 @@ impl CausticTracer {
         if scene.intersect(&Ray::new(o, seg / len), len).is_some() {
             return;
         }
-        let v = beta * e.f_cos / (self.pixel_norm * cos_c * cos_c * cos_c * dist2);
+        let v = beta * f_cos / (self.pixel_norm * cos_c * cos_c * cos_c * dist2);
         if !v.is_finite() {
             return;
         }

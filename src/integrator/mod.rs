@@ -72,7 +72,7 @@ pub fn sample_bsdf(
     let (uses_lobe, uses_dir) = material.sample_uses();
     let u_lobe = sampler.get_1d_if(uses_lobe);
     let u = sampler.get_2d_if(uses_dir);
-    material.sample(wo, hit.n, u_lobe, u)
+    material.sample(wo, hit.normals(), u_lobe, u)
 }
 
 /// The roulette's decision for throughput `beta`: the survival probability q the survivor's

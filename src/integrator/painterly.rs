@@ -33,7 +33,7 @@ use self::bounce::painterly_direction;
 use self::params::PainterlyParams;
 use self::stream::PaintStream;
 use super::{path, russian_roulette};
-use crate::geometry::spawn_origin;
+use crate::geometry::{spawn_origin, Normals};
 use crate::material::{fresnel, BsdfSample, Material, MaterialKind};
 use crate::math::{DVec3, Ray};
 use crate::sampling::Sampler;
@@ -109,9 +109,9 @@ pub fn radiance(
         let u_lobe = sampler.get_1d();
         let u = sampler.get_2d();
         let sample = if paint_here {
-            painterly_sample(material, wo, hit.n, params, stream, depth)
+            painterly_sample(material, wo, hit.normals(), params, stream, depth)
         } else {
-            material.sample(wo, hit.n, u_lobe, u)
+            material.sample(wo, hit.normals(), u_lobe, u)
         };
         let Some(bs) = sample else {
             break;
@@ -157,7 +157,7 @@ fn paints(material: &Material) -> bool {
 fn painterly_sample(
     material: &Material,
     wo: DVec3,
-    n: DVec3,
+    nn: Normals,
     params: &PainterlyParams,
     stream: &PaintStream,
     depth: u32,
@@ -165,7 +165,7 @@ fn painterly_sample(
     match material.kind {
         MaterialKind::Diffuse => {
             // Two-sided, like the correct diffuse: the normal on the side the path arrived from.
-            let ns = if wo.dot(n) >= 0.0 { n } else { -n };
+            let ns = if wo.dot(nn.g) >= 0.0 { nn.s } else { -nn.s };
             let (u1, u2) = stream.angles(depth);
             let b = painterly_direction(ns, params.hemisphere, u1, u2)?;
             let weight = material.color * b.factor;
@@ -182,18 +182,18 @@ fn painterly_sample(
             })
         }
         MaterialKind::Glass { ior } => {
-            let entering = wo.dot(n) > 0.0;
+            let entering = wo.dot(nn.g) > 0.0;
             let eta = if entering { ior } else { 1.0 / ior };
-            if fresnel::dielectric(wo.dot(n).abs(), eta).reflectance >= 1.0 {
+            if fresnel::dielectric(wo.dot(nn.g).abs(), eta).reflectance >= 1.0 {
                 // smallpaint's glass has no reflection: total internal reflection ends the path.
                 return None;
             }
             // u_lobe = 1 > reflectance selects the refraction lobe; its weight is already the
             // tint over eta^2 (radiance compression), the 1 - F of choosing it cancelling.
             material
-                .sample(wo, n, 1.0, (0.0, 0.0))
+                .sample(wo, nn, 1.0, (0.0, 0.0))
                 .filter(|s| s.wi.is_finite() && s.weight.is_finite())
         }
-        MaterialKind::Mirror => material.sample(wo, n, 0.0, (0.0, 0.0)),
+        MaterialKind::Mirror => material.sample(wo, nn, 0.0, (0.0, 0.0)),
     }
 }

@@ -10,7 +10,7 @@
 use super::caustics::{connection_ratio, CausticPass, JOIN_ATTEMPT};
 use super::{next_ray, sample_bsdf};
 use crate::accel::lanes::RayBatch;
-use crate::geometry::{spawn_origin, Hit};
+use crate::geometry::{spawn_origin, Hit, Normals};
 use crate::light::LightSample;
 use crate::material::Material;
 use crate::math::{max_component, DVec3, Ray};
@@ -385,7 +385,7 @@ impl PathState {
                 hit.n.dot(wo).abs(),
                 hit.n.dot(bs.wi).abs(),
                 bs.pdf,
-                || material.eval(bs.wi, wo, hit.n).pdf,
+                || material.eval(bs.wi, wo, hit.normals()).pdf,
             );
         }
         self.specular = bs.delta;
@@ -585,16 +585,16 @@ fn connect_caustic(
     if roll >= bound * (cos_x.abs() * cos_y.abs()) {
         return None;
     }
-    let e_x = material.eval(wo, dir, hit.n);
+    let e_x = material.eval(wo, dir, hit.normals());
     if e_x.f_cos.max_element() <= 0.0 {
         return None;
     }
     let wo_y = v.wo();
-    let e_y = my.eval(wo_y, -dir, n_y);
+    let e_y = my.eval(wo_y, -dir, Normals::flat(n_y));
     if e_y.f_cos.max_element() <= 0.0 {
         return None;
     }
-    let pdf_y = my.eval(-dir, wo_y, n_y).pdf;
+    let pdf_y = my.eval(-dir, wo_y, Normals::flat(n_y)).pdf;
     let g_xy = n_y.dot(dir).abs() / d2;
     let cos_y_in = n_y.dot(wo_y).abs();
     let r = connection_ratio(
@@ -701,7 +701,7 @@ pub(crate) fn light_shadow(
     let u = sampler.get_2d();
     let side = spawn_origin(hit.p, hit.n, hit.err, wo);
     let ls = scene.lights.sample(hit.p, side, u_light, u)?;
-    let e = material.eval(wo, ls.wi, hit.n);
+    let e = material.eval(wo, ls.wi, hit.normals());
     if e.f_cos.max_element() <= 0.0 || ls.pdf <= 0.0 {
         return None;
     }
@@ -888,7 +888,7 @@ mod mis_tests {
                 if delta[i] {
                     side.specular(cos(i, wo), cos(i, wi));
                 } else {
-                    let n = normals[i];
+                    let n = Normals::flat(normals[i]);
                     let (pdf, rev) = (m.eval(wo, wi, n).pdf, m.eval(wi, wo, n).pdf);
                     side.leave_y(cos(i, wo), pdf, rev, cos(i, wi));
                 }
@@ -897,13 +897,13 @@ mod mis_tests {
             let d = dir(pts[z], pts[end]);
             let wo_end = dir(pts[end], pts[end - 1]);
             let wo_z = dir(pts[z], pts[before_z]);
-            let pdf_z = m.eval(wo_z, d, normals[z]).pdf;
+            let pdf_z = m.eval(wo_z, d, Normals::flat(normals[z])).pdf;
             let join = connection_ratio(
                 side.here(),
                 join_camera_side(
                     pdf_z,
                     cos(end, d) / to.length_squared(),
-                    m.eval(-d, wo_end, normals[end]).pdf,
+                    m.eval(-d, wo_end, Normals::flat(normals[end])).pdf,
                     cos(end, wo_end),
                 ),
             );
@@ -934,7 +934,7 @@ mod mis_tests {
                 } else {
                     let t = (pts[here] - pts[from]).length();
                     chains.at_surface(run, specular, prev_pdf, cos(here, arrive), t);
-                    let n = normals[here];
+                    let n = Normals::flat(normals[here]);
                     let pdf = m.eval(arrive, leave, n).pdf;
                     chains.bounce(false, cos(here, arrive), cos(here, leave), pdf, || {
                         m.eval(leave, arrive, n).pdf

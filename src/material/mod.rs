@@ -11,6 +11,7 @@
 
 pub mod fresnel;
 
+use crate::geometry::Normals;
 use crate::math::{DVec3, Frame};
 use crate::sampling::warp;
 use std::f64::consts::FRAC_1_PI;
@@ -103,19 +104,31 @@ impl Material {
     }
 
     /// Sample an incident direction for outgoing `wo` (unit, pointing away from the surface) at a
-    /// surface with geometric normal `n`. `u_lobe` picks between reflection and refraction.
+    /// surface with normals `nn`. `u_lobe` picks between reflection and refraction.
+    ///
+    /// With a shading normal (pbrt's approach, made leak-free): the geometric normal decides
+    /// which side `wo` is on (so glass knows inside from outside) and which side `wi` must end
+    /// on; the lobes are built about the shading normal turned to `wo`'s side. A diffuse sample
+    /// that falls below the geometric surface is dropped (f is zero there: no light leaks
+    /// through). A mirror or glass whose shading-normal directions would cross the geometric
+    /// surface the wrong way, or whose `wo` lies behind the shading normal (grazing views, the
+    /// silhouette), uses the geometric normal for that `wo` instead of going black.
     #[inline(always)]
-    pub fn sample(&self, wo: DVec3, n: DVec3, u_lobe: f64, u: (f64, f64)) -> Option<BsdfSample> {
+    pub fn sample(&self, wo: DVec3, nn: Normals, u_lobe: f64, u: (f64, f64)) -> Option<BsdfSample> {
+        let n = nn.g;
         let cos_o = wo.dot(n);
         match self.kind {
             MaterialKind::Diffuse => {
                 // Two-sided: reflect on the side the path arrived from.
-                let ns = if cos_o >= 0.0 { n } else { -n };
+                let ns = if cos_o >= 0.0 { nn.s } else { -nn.s };
                 let local = warp::cosine_hemisphere(u);
                 if local.z <= 0.0 {
                     return None;
                 }
                 let wi = Frame::from_normal(ns).to_world(local);
+                if nn.smooth() && wi.dot(n) * cos_o <= 0.0 {
+                    return None;
+                }
                 Some(BsdfSample {
                     wi,
                     weight: self.color,
@@ -124,17 +137,37 @@ impl Material {
                     eta_scale: 1.0,
                 })
             }
-            MaterialKind::Mirror => Some(BsdfSample {
-                wi: reflect(wo, n),
-                weight: self.color,
-                pdf: 1.0,
-                delta: true,
-                eta_scale: 1.0,
-            }),
+            MaterialKind::Mirror => {
+                let mut wi = reflect(wo, n);
+                if nn.smooth() {
+                    let ws = reflect(wo, nn.s);
+                    if wo.dot(nn.s) * cos_o > 0.0 && ws.dot(n) * cos_o > 0.0 {
+                        wi = ws;
+                    }
+                }
+                Some(BsdfSample {
+                    wi,
+                    weight: self.color,
+                    pdf: 1.0,
+                    delta: true,
+                    eta_scale: 1.0,
+                })
+            }
             MaterialKind::Glass { ior } => {
                 let entering = cos_o > 0.0;
+                let n = if nn.smooth() && glass_frame_holds(wo, nn, entering, ior) {
+                    nn.s
+                } else {
+                    n
+                };
                 let (eta, nf) = if entering { (ior, n) } else { (1.0 / ior, -n) };
-                let cos_i = cos_o.abs();
+                // |wo . n| for the normal chosen: the geometric cos_o keeps flat surfaces'
+                // arithmetic as it was.
+                let cos_i = if nn.smooth() {
+                    wo.dot(nf).abs()
+                } else {
+                    cos_o.abs()
+                };
                 let f = fresnel::dielectric(cos_i, eta);
                 if u_lobe < f.reflectance {
                     Some(BsdfSample {
@@ -160,6 +193,58 @@ impl Material {
         }
     }
 
+    /// [`Material::sample`] for importance transport (light paths; `wo` towards the light):
+    /// the same on flat surfaces. At a shading normal the adjoint BSDF f*(wo, wi) =
+    /// f(wi, wo) cos_s(wo) / |cos_g wo| (Veach 5.3.6): a diffuse bounce samples wi by |cos_g wi|
+    /// about the geometric normal, which makes the weight cos_s(wo) / |cos_g wo| times the colour
+    /// and covers every wi the adjoint reaches (about the shading normal, wi behind it would be
+    /// missed); delta lobes take pbrt's factor [`Normals::adjoint`].
+    #[inline(always)]
+    pub fn sample_adjoint(
+        &self,
+        wo: DVec3,
+        nn: Normals,
+        u_lobe: f64,
+        u: (f64, f64),
+    ) -> Option<BsdfSample> {
+        if !nn.smooth() {
+            return self.sample(wo, nn, u_lobe, u);
+        }
+        match self.kind {
+            MaterialKind::Diffuse => {
+                let mut bs = self.sample(wo, Normals::flat(nn.g), u_lobe, u)?;
+                let cos_g = wo.dot(nn.g);
+                let side = if cos_g >= 0.0 { nn.s } else { -nn.s };
+                let w = wo.dot(side).max(0.0) / cos_g.abs();
+                if !(w.is_finite() && w > 0.0) {
+                    return None;
+                }
+                bs.weight *= w;
+                Some(bs)
+            }
+            _ => {
+                let mut bs = self.sample(wo, nn, u_lobe, u)?;
+                bs.weight *= nn.adjoint(wo, bs.wi);
+                Some(bs)
+            }
+        }
+    }
+
+    /// f*(wo, wi) |cos_g wi| for importance transport (`wo` towards the light): [`Material::eval`]'s
+    /// f cos on flat surfaces, and at a shading normal the radiance BSDF read from the camera's
+    /// end, f(wi, wo) cos_s(wo) |cos_g wi| / |cos_g wo|.
+    #[inline(always)]
+    pub fn eval_adjoint(&self, wo: DVec3, wi: DVec3, nn: Normals) -> DVec3 {
+        if !nn.smooth() {
+            return self.eval(wo, wi, nn).f_cos;
+        }
+        let ratio = wi.dot(nn.g).abs() / wo.dot(nn.g).abs();
+        if !ratio.is_finite() {
+            return DVec3::ZERO;
+        }
+        self.eval(wi, wo, nn).f_cos * ratio
+    }
+
     /// An upper bound on [`Material::eval`]'s `f_cos` over all directions, per channel, up to
     /// the rounding of the cosine (a unit vector's dot product with itself can be 1 + 1 ulp).
     #[inline]
@@ -170,11 +255,17 @@ impl Material {
         }
     }
 
-    /// f cos and pdf for a pair of directions; zero for delta materials.
+    /// f cos and pdf for a pair of directions; zero for delta materials. With a shading
+    /// normal: zero unless `wo` and `wi` lie on the same side of the geometric normal (pbrt's
+    /// reflection test: no light leaks through the surface), and the cosine is the shading
+    /// normal's (turned to that side), clamped at 0 where `wi` falls behind it, which is where
+    /// [`Material::sample`]'s pdf is 0 too. f itself stays color / pi for any `wo` on the side,
+    /// so a `wo` behind the shading normal (silhouettes, grazing views) is still lit.
     #[inline]
-    pub fn eval(&self, wo: DVec3, wi: DVec3, n: DVec3) -> BsdfEval {
+    pub fn eval(&self, wo: DVec3, wi: DVec3, nn: Normals) -> BsdfEval {
         match self.kind {
             MaterialKind::Diffuse => {
+                let n = nn.g;
                 let (co, ci) = (wo.dot(n), wi.dot(n));
                 if co * ci <= 0.0 {
                     return BsdfEval {
@@ -182,7 +273,12 @@ impl Material {
                         pdf: 0.0,
                     };
                 }
-                let cos = ci.abs();
+                let cos = if nn.smooth() {
+                    let side = if co >= 0.0 { nn.s } else { -nn.s };
+                    wi.dot(side).max(0.0)
+                } else {
+                    ci.abs()
+                };
                 BsdfEval {
                     f_cos: self.color * (cos * FRAC_1_PI),
                     pdf: cos * FRAC_1_PI,
@@ -194,6 +290,27 @@ impl Material {
             },
         }
     }
+}
+
+/// Whether glass can use the shading normal for `wo`: `wo` in front of it on its geometric
+/// side, the reflection staying on that side and the refraction (if any) crossing over.
+fn glass_frame_holds(wo: DVec3, nn: Normals, entering: bool, ior: f64) -> bool {
+    let (eta, nf) = if entering {
+        (ior, nn.s)
+    } else {
+        (1.0 / ior, -nn.s)
+    };
+    let cos_g = wo.dot(nn.g);
+    let cos_i = wo.dot(nf);
+    if cos_i <= 0.0 || reflect(wo, nn.s).dot(nn.g) * cos_g <= 0.0 {
+        return false;
+    }
+    let f = fresnel::dielectric(cos_i, eta);
+    if f.reflectance >= 1.0 {
+        return true;
+    }
+    let wt = -wo / eta + nf * (cos_i / eta - f.cos_t);
+    wt.dot(nn.g) * cos_g < 0.0
 }
 
 /// Mirror `wo` about the normal (either orientation of `n` gives the same result).
@@ -237,7 +354,7 @@ mod tests {
             let kind = m.kind;
             let mut dir = || warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
             let (wo, wi, n) = (dir(), dir(), dir());
-            let e = m.eval(wo, wi, n);
+            let e = m.eval(wo, wi, Normals::flat(n));
             let bound = m.f_cos_bound() * (1.0 + 1e-12);
             assert!(
                 e.f_cos.cmple(bound).all(),
@@ -245,7 +362,7 @@ mod tests {
                 e.f_cos
             );
             // The normal itself: the largest cosine there is.
-            let e = m.eval(n, n, n);
+            let e = m.eval(n, n, Normals::flat(n));
             assert!(e.f_cos.cmple(bound).all(), "{kind:?} at the normal");
         });
     }
@@ -260,7 +377,7 @@ mod tests {
             let mut dir = || warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
             let (wo, n) = (dir(), dir());
             let u = (rng.next_f64(), rng.next_f64());
-            let Some(bs) = m.sample(wo, n, rng.next_f64(), u) else {
+            let Some(bs) = m.sample(wo, Normals::flat(n), rng.next_f64(), u) else {
                 return;
             };
             let restored = bs.weight * bs.eta_scale;
@@ -278,5 +395,89 @@ mod tests {
             }
         });
         assert!(refractions.iter().all(|&r| r > 1000), "{refractions:?}");
+    }
+
+    /// Random geometric normals with shading normals up to 60 degrees off them.
+    fn random_normals(rng: &mut Rng) -> Normals {
+        let g = warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
+        let a = rng.next_f64() * 60f64.to_radians();
+        let phi = rng.next_f64() * std::f64::consts::TAU;
+        let local = DVec3::new(a.sin() * phi.cos(), a.sin() * phi.sin(), a.cos());
+        Normals::new(g, Frame::from_normal(g).to_world(local))
+    }
+
+    /// With a shading normal no sampled or evaluated direction crosses the geometric surface
+    /// the wrong way (reflection stays on `wo`'s side, refraction crosses), whatever `wo`,
+    /// grazing and behind-the-shading-normal views included.
+    #[test]
+    fn shading_normals_never_leak_through_the_surface() {
+        for_random_materials(7, |m, rng| {
+            let nn = random_normals(rng);
+            let wo = warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
+            let u = (rng.next_f64(), rng.next_f64());
+            let cos_o = wo.dot(nn.g);
+            if let Some(bs) = m.sample(wo, nn, rng.next_f64(), u) {
+                let refracted = bs.eta_scale != 1.0;
+                let crossed = bs.wi.dot(nn.g) * cos_o < 0.0;
+                assert_eq!(crossed, refracted, "{:?}: wo {wo:?} wi {:?}", m.kind, bs.wi);
+                assert!(bs.weight.is_finite() && (bs.wi.length() - 1.0).abs() < 1e-9);
+            }
+            let wi = warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
+            if wi.dot(nn.g) * cos_o <= 0.0 {
+                assert_eq!(m.eval(wo, wi, nn).f_cos, DVec3::ZERO);
+            }
+        });
+    }
+
+    /// The adjoint correction turns f cos_s into the BSDF seen from the other end: with it, the
+    /// light path's f(wo -> wi) |cos_g wi| equals the camera path's f(wi -> wo) |cos_g wo| read
+    /// in reverse (Veach's f*(wo, wi) = f(wi, wo) for the shading-normal BSDF f cos_s / |cos_g|).
+    #[test]
+    fn the_adjoint_correction_makes_light_and_camera_paths_agree() {
+        let m = Material {
+            kind: MaterialKind::Diffuse,
+            color: DVec3::splat(0.8),
+            emission: DVec3::ZERO,
+        };
+        let mut rng = Rng::new(17);
+        let mut checked = 0;
+        for _ in 0..50_000 {
+            let nn = random_normals(&mut rng);
+            let mut dir = || warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
+            let (wo, wi) = (dir(), dir());
+            let light = m.eval_adjoint(wo, wi, nn) / wi.dot(nn.g).abs();
+            let camera = m.eval(wi, wo, nn).f_cos / wo.dot(nn.g).abs();
+            assert!(
+                (light - camera).abs().max_element() <= 1e-9 * camera.max_element().max(1.0),
+                "{light:?} vs {camera:?}"
+            );
+            checked += (camera.max_element() > 0.0) as u32;
+            // Where the shading cosine of wi is positive, pbrt's factor on f cos_s is the same.
+            let e = m.eval(wo, wi, nn).f_cos;
+            if e.max_element() > 0.0 {
+                let pbrt = e * nn.adjoint(wo, wi) / wi.dot(nn.g).abs();
+                assert!(
+                    (pbrt - camera).abs().max_element() <= 1e-9 * camera.max_element().max(1.0)
+                );
+            }
+            // The adjoint sample: weight = f* |cos_g wi| / pdf, its pdf positive wherever f* is.
+            let u = (rng.next_f64(), rng.next_f64());
+            if let Some(bs) = m.sample_adjoint(wo, nn, 0.5, u) {
+                let f = m.eval_adjoint(wo, bs.wi, nn);
+                assert!(
+                    (bs.weight - f / bs.pdf).abs().max_element()
+                        <= 1e-9 * (1.0 + bs.weight.max_element())
+                );
+            }
+            if camera.max_element() > 0.0 {
+                assert!(
+                    wi.dot(nn.g) * wo.dot(nn.g) > 0.0,
+                    "f* beyond the adjoint sample's support"
+                );
+            }
+        }
+        assert!(checked > 10_000);
+        // Flat surfaces: exactly 1.
+        assert_eq!(Normals::flat(DVec3::Z).adjoint(DVec3::X, DVec3::Y), 1.0);
     }
 }

@@ -156,6 +156,9 @@ pub struct MeshDesc {
     pub name: Option<Spanned<String>>,
     pub path: Option<Spanned<String>>,
     pub torus_knot: Option<Spanned<TorusKnotDesc>>,
+    /// Interpolate vertex normals (default: where the file has them; the torus knot's exact
+    /// ones); false shades every triangle flat.
+    pub smooth: Option<bool>,
     pub translate: Option<V3>,
     pub scale: Option<Positive>,
     pub rotate: Option<V3>,

@@ -103,6 +103,10 @@ struct Builder<'a> {
     prims: Vec<Primitive>,
     lights: Vec<Light>,
     mesh_triangles: u64,
+    /// Per primitive, its corners' shading normals (zeros: flat); empty while every primitive
+    /// is flat.
+    shading: Vec<[[f32; 3]; 3]>,
+    warnings: Vec<String>,
 }
 
 impl Builder<'_> {
@@ -178,6 +182,8 @@ fn build(
         prims: Vec::new(),
         lights: Vec::new(),
         mesh_triangles: 0,
+        shading: Vec::new(),
+        warnings: Vec::new(),
     };
     for (i, s) in desc.sphere.iter().enumerate() {
         let object = format!("sphere[{i}]");
@@ -226,17 +232,29 @@ fn build(
     for (i, m) in desc.mesh.iter().enumerate() {
         let object = format!("mesh[{i}]");
         b.name(&m.name, &object)?;
-        let tris = build_mesh(&mut b, m, &object, options)?;
+        let mesh = build_mesh(&mut b, m, &object, options)?;
         let material = b.material(&m.material(), &object, true)?;
-        b.add(tris.into_iter().map(Shape::Triangle), material);
+        let first = b.prims.len();
+        b.add(mesh.triangles.into_iter().map(Shape::Triangle), material);
+        if mesh.normals.iter().any(Option::is_some) {
+            b.shading.resize(first, [[0.0; 3]; 3]);
+            b.shading
+                .extend(mesh.normals.iter().map(|n| n.unwrap_or([[0.0; 3]; 3])));
+        }
+        b.warnings.extend(mesh.warnings);
     }
 
     let Builder {
         materials,
         prims,
         lights,
+        mut shading,
+        warnings,
         ..
     } = b;
+    if !shading.is_empty() {
+        shading.resize(prims.len(), [[0.0; 3]; 3]);
+    }
     let choice = options.accel.or(desc.accel).unwrap_or_default();
     // Probe with the camera's rays at the image's aspect ratio: 32 rows are plenty to tell
     // boxes that separate the objects from boxes that do not, at a cost of microseconds.
@@ -265,6 +283,7 @@ fn build(
         accel: format!("{} ({why})", accel.describe(prims.len())),
         light_sampling,
         build_time: started.elapsed(),
+        warnings,
     };
     Ok(Scene {
         name: file.to_string(),
@@ -273,6 +292,7 @@ fn build(
         materials,
         lights,
         accel,
+        shading,
         background: desc
             .background
             .map_or(DVec3::ZERO, |c| DVec3::from_array(c.0)),
@@ -294,27 +314,23 @@ fn clip_sphere_lights(lights: Vec<Light>, prims: &[Primitive]) -> Vec<Light> {
         .collect()
 }
 
-/// The triangles of one `[[mesh]]`, transformed.
+/// The triangles (and shading normals) of one `[[mesh]]`, transformed.
 fn build_mesh(
     b: &mut Builder,
     m: &MeshDesc,
     object: &str,
     options: &BuildOptions,
-) -> Result<Vec<Triangle>, SceneError> {
+) -> Result<mesh::Mesh, SceneError> {
     let room = MAX_MESH_TRIANGLES.saturating_sub(b.mesh_triangles);
-    let tris = match (&m.path, &m.torus_knot) {
+    let built = match (&m.path, &m.torus_knot) {
         (Some(path), None) => {
             let full = match &options.base_dir {
                 Some(base) => base.join(path.get_ref()),
                 None => PathBuf::from(path.get_ref()),
             };
-            mesh::load_obj(&full, room).map_err(|msg| {
-                b.err(
-                    Some(path.span()),
-                    format!("{object}.path"),
-                    format!("{}: {msg}", full.display()),
-                )
-            })?
+            // The reader's messages start with the file (and line).
+            mesh::load_obj(&full, room, m.smooth)
+                .map_err(|msg| b.err(Some(path.span()), format!("{object}.path"), msg))?
         }
         (None, Some(knot)) => {
             let k = knot.get_ref();
@@ -344,7 +360,17 @@ fn build_mesh(
                     ),
                 ));
             }
-            knot_gen.triangles()
+            let (triangles, normals) = knot_gen.triangles_and_normals();
+            let smooth = m.smooth != Some(false);
+            mesh::Mesh {
+                triangles,
+                normals: if smooth {
+                    normals.into_iter().map(Some).collect()
+                } else {
+                    Vec::new()
+                },
+                warnings: Vec::new(),
+            }
         }
         (Some(path), Some(_)) => {
             return Err(b.err(
@@ -366,11 +392,11 @@ fn build_mesh(
         rotate_degrees: m.rotate.map_or(DVec3::ZERO, |r| DVec3::from_array(r.0)),
         translate: m.translate.map_or(DVec3::ZERO, |t| DVec3::from_array(t.0)),
     };
-    let tris = transform
-        .apply(&tris)
+    let built = transform
+        .apply_mesh(built)
         .map_err(|msg| b.err(None, object.to_string(), msg))?;
-    b.mesh_triangles += tris.len() as u64;
-    Ok(tris)
+    b.mesh_triangles += built.triangles.len() as u64;
+    Ok(built)
 }
 
 fn build_camera(desc: &SceneDesc, src: &str, file: &str) -> Result<Camera, SceneError> {

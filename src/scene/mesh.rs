@@ -10,13 +10,16 @@
 //! color = 0.8                 # the same material fields as a sphere
 //! ```
 //!
-//! OBJ material libraries, normals and texture coordinates are ignored: a mesh has the one
-//! material of its `[[mesh]]` entry and flat (geometric) normals. Polygons are triangulated by
-//! tobj; points and lines are skipped; triangles of zero area are dropped.
+//! OBJ vertex normals (`vn`) are interpolated across each triangle (smooth shading) unless the
+//! entry says `smooth = false`; `smooth = true` on a file without normals computes them from the
+//! faces around each vertex. The torus knot has exact normals, smooth unless `smooth = false`.
+//! Material libraries and texture coordinates are ignored: a mesh has the one material of its
+//! `[[mesh]]` entry. Polygons are fan-triangulated (see [`super::obj`]); points and lines are
+//! skipped; triangles of zero area are dropped.
 
+use super::obj;
 use crate::geometry::Triangle;
 use crate::math::DVec3;
-use crate::scene::description::MAX_MAGNITUDE;
 use glam::DMat3;
 use std::path::Path;
 
@@ -53,81 +56,141 @@ impl Transform {
 
     /// Apply to triangles, dropping those that end up degenerate. Errors on non-finite vertices.
     pub fn apply(&self, tris: &[Triangle]) -> Result<Vec<Triangle>, String> {
+        let mesh = Mesh {
+            triangles: tris.to_vec(),
+            ..Mesh::default()
+        };
+        Ok(self.apply_mesh(mesh)?.triangles)
+    }
+
+    /// Apply to a mesh, its normals rotated with it (the scale is uniform and positive, so a
+    /// rotation is all normals need), dropping triangles that end up degenerate.
+    pub fn apply_mesh(&self, mesh: Mesh) -> Result<Mesh, String> {
         let m = self.matrix();
-        let mut out = Vec::with_capacity(tris.len());
-        for t in tris {
+        let rot = self.matrix() * (1.0 / self.scale);
+        let has_normals = !mesh.normals.is_empty();
+        let mut out = Mesh {
+            triangles: Vec::with_capacity(mesh.triangles.len()),
+            normals: Vec::with_capacity(mesh.normals.len()),
+            warnings: mesh.warnings,
+        };
+        for (i, t) in mesh.triangles.iter().enumerate() {
             let p = t.p().map(|v| DVec3::from(m * v.to_glam()) + self.translate);
             if !p.iter().all(|v| v.is_finite()) {
                 return Err("a vertex is not a finite number".into());
             }
             let t = Triangle::new(p[0], p[1], p[2]);
-            if t.normal().is_some() {
-                out.push(t);
+            if t.normal().is_none() {
+                continue;
+            }
+            out.triangles.push(t);
+            if has_normals {
+                let ns = mesh.normals.get(i).copied().flatten().map(|ns| {
+                    ns.map(|n| {
+                        let n = rot * glam::DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+                        n.normalize_or_zero().as_vec3().to_array()
+                    })
+                });
+                out.normals.push(ns);
             }
         }
         Ok(out)
     }
 }
 
-/// Read the triangles of an OBJ file; `limit` is how many more triangles the scene accepts.
-/// Errors are messages about the file (the caller adds the path and the scene location).
-pub fn load_obj(path: &Path, limit: u64) -> Result<Vec<Triangle>, String> {
-    // Read it ourselves: io errors (missing, a directory, no permission) say what went wrong,
-    // where tobj would only say "open file failed".
-    let bytes = std::fs::read(path).map_err(|e| match e.kind() {
-        std::io::ErrorKind::IsADirectory => "is a directory, not an OBJ file".to_string(),
-        _ => format!("cannot read OBJ file: {e}"),
-    })?;
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-        ..Default::default()
-    };
-    let mut reader = std::io::Cursor::new(bytes);
-    // Material libraries are not used: a mesh takes the material of its `[[mesh]]` entry.
-    let (models, _) = tobj::load_obj_buf(&mut reader, &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| format!("invalid OBJ file: {e}"))?;
-    let count: u64 = models.iter().map(|m| m.mesh.indices.len() as u64 / 3).sum();
-    if count > limit {
-        return Err(format!(
-            "has {count} triangles, more than the {limit} this scene has room for \
-             (at most {MAX_MESH_TRIANGLES} mesh triangles per scene)"
-        ));
-    }
-    let mut tris = Vec::with_capacity(count as usize);
-    for model in &models {
-        let pos = &model.mesh.positions;
-        let vertex = |i: u32| -> Result<DVec3, String> {
-            let i = i as usize;
-            let v = pos
-                .get(3 * i..3 * i + 3)
-                .map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
-                .ok_or_else(|| format!("face vertex index {} out of range", i + 1))?;
-            // The same bound the scene file puts on coordinates: NaN, inf or 1e38 would turn
-            // into NaN bounds and invalid samples inside the renderer.
-            if !v.is_finite() || v.abs().max_element() > MAX_MAGNITUDE {
-                return Err(format!(
-                    "vertex {} has coordinates {:?}: each must be a finite number of magnitude \
-                     at most {MAX_MAGNITUDE:e}",
-                    i + 1,
-                    v.to_array()
-                ));
-            }
-            Ok(v)
-        };
-        for f in model.mesh.indices.chunks_exact(3) {
-            tris.push(Triangle::new(vertex(f[0])?, vertex(f[1])?, vertex(f[2])?));
-        }
-    }
-    if tris.is_empty() {
-        return Err("contains no faces".into());
-    }
-    Ok(tris)
+/// A mesh's triangles and, per triangle, its corners' unit shading normals (`None`: flat).
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub triangles: Vec<Triangle>,
+    /// Empty for a flat mesh, else one entry per triangle.
+    pub normals: Vec<Option<[[f32; 3]; 3]>>,
+    /// What the reader skipped that the user may want to know (named by file).
+    pub warnings: Vec<String>,
 }
 
+impl Mesh {
+    /// Whether any triangle has vertex normals.
+    pub fn is_smooth(&self) -> bool {
+        self.normals.iter().any(Option::is_some)
+    }
+}
+
+/// Read the triangles of an OBJ file; `limit` is how many more triangles the scene accepts.
+/// `smooth`: the `[[mesh]]` key (None: smooth where the file gives normals). Errors read
+/// `path:line: reason`.
+pub fn load_obj(path: &Path, limit: u64, smooth: Option<bool>) -> Result<Mesh, String> {
+    let data = obj::read(path, limit)?;
+    let pos = |c: obj::Corner| DVec3::from_array(data.positions[c.v as usize]);
+    let unit = |n: [f64; 3]| {
+        let n = DVec3::from_array(n);
+        let len = n.length();
+        (len > 0.0 && len.is_finite()).then(|| n / len)
+    };
+    // `smooth = true` on faces the file gives no normals: the angle-weighted average of the
+    // faces around each vertex, as Mitsuba computes for a mesh without normals.
+    let missing = data
+        .triangles
+        .iter()
+        .any(|t| t.iter().any(|c| c.vn == obj::NO_NORMAL));
+    let computed: Vec<DVec3> = if smooth == Some(true) && missing {
+        let mut acc = vec![DVec3::ZERO; data.positions.len()];
+        for t in &data.triangles {
+            let p = t.map(pos);
+            let Some(n) = Triangle::new(p[0], p[1], p[2]).normal() else {
+                continue;
+            };
+            for k in 0..3 {
+                let (a, b) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+                let angle = a
+                    .normalize_or_zero()
+                    .dot(b.normalize_or_zero())
+                    .clamp(-1.0, 1.0);
+                acc[t[k].v as usize] += n * angle.acos();
+            }
+        }
+        acc
+    } else {
+        Vec::new()
+    };
+    let mut mesh = Mesh {
+        triangles: Vec::with_capacity(data.triangles.len()),
+        normals: Vec::new(),
+        warnings: data.warnings.clone(),
+    };
+    let wants_normals = smooth != Some(false) && (!data.normals.is_empty() || !computed.is_empty());
+    for t in &data.triangles {
+        let [mut p0, p1, mut p2] = t.map(pos);
+        let corner_normal = |c: obj::Corner| match c.vn {
+            obj::NO_NORMAL => computed
+                .get(c.v as usize)
+                .copied()
+                .and_then(|n| unit(n.to_array())),
+            i => unit(data.normals[i as usize]),
+        };
+        let mut normals = if wants_normals {
+            match t.map(corner_normal) {
+                [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+                _ => None,
+            }
+        } else {
+            None
+        };
+        // Where the file's normals and its winding disagree, the normals say where the outside
+        // is (pbrt turns the geometric normal towards the shading normal): rewind the triangle.
+        if let (Some(ns), Some(g)) = (&mut normals, Triangle::new(p0, p1, p2).normal()) {
+            if (ns[0] + ns[1] + ns[2]).dot(g) < 0.0 {
+                std::mem::swap(&mut p0, &mut p2);
+                ns.swap(0, 2);
+            }
+        }
+        mesh.triangles.push(Triangle::new(p0, p1, p2));
+        if wants_normals {
+            mesh.normals
+                .push(normals.map(|ns| ns.map(|n| n.as_vec3().to_array())));
+        }
+    }
+    Ok(mesh)
+}
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,6 +6,7 @@ pub mod description;
 pub mod error;
 pub mod load;
 pub mod mesh;
+pub mod obj;
 
 use crate::accel::lanes::RayBatch;
 use crate::accel::Accel;
@@ -75,6 +76,8 @@ pub struct BuildReport {
     pub accel: String,
     pub light_sampling: String,
     pub build_time: Duration,
+    /// Things the build skipped that the user may want to know (OBJ materials).
+    pub warnings: Vec<String>,
 }
 
 impl std::fmt::Display for BuildReport {
@@ -83,7 +86,11 @@ impl std::fmt::Display for BuildReport {
             f,
             "accel: {}; light sampling: {}",
             self.accel, self.light_sampling
-        )
+        )?;
+        for w in &self.warnings {
+            write!(f, "; warning: {w}")?;
+        }
+        Ok(())
     }
 }
 
@@ -96,6 +103,9 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub lights: Lights,
     pub accel: Accel,
+    /// Per primitive, the shading normals of its three corners (all zero: flat); empty when
+    /// the scene has no smooth-shaded mesh, so flat scenes pay one bounds check per hit.
+    pub shading: Vec<[[f32; 3]; 3]>,
     pub background: DVec3,
     /// The scene file's `[render]` table: what it changes from the defaults.
     pub render: SettingsOverrides,
@@ -103,9 +113,51 @@ pub struct Scene {
 }
 
 impl Scene {
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
-        self.accel.intersect(&self.prims, ray, t_max)
+        self.accel
+            .intersect(&self.prims, ray, t_max)
+            .map(|h| self.shade(h))
+    }
+
+    /// Whether any primitive has vertex normals.
+    pub fn has_shading_normals(&self) -> bool {
+        !self.shading.is_empty()
+    }
+
+    /// The hit with its shading normal (see [`Scene::interpolate_normal`]); flat scenes pay
+    /// one test.
+    #[inline(always)]
+    fn shade(&self, hit: Hit) -> Hit {
+        if self.shading.is_empty() {
+            hit
+        } else {
+            self.interpolate_normal(hit)
+        }
+    }
+
+    /// The corners' normals interpolated at the hit's barycentrics, within 90 degrees of the
+    /// geometric normal; the geometric normal where the primitive has none or the
+    /// interpolation degenerates (normals that cancel, or point away from the face). Kept out
+    /// of line so flat scenes' hot loops stay as small as they were.
+    #[inline(never)]
+    fn interpolate_normal(&self, mut hit: Hit) -> Hit {
+        let Some(ns) = self.shading.get(hit.prim as usize) else {
+            return hit;
+        };
+        if ns[0] == [0.0; 3] {
+            return hit;
+        }
+        let v = |i: usize| DVec3::new(ns[i][0] as f64, ns[i][1] as f64, ns[i][2] as f64);
+        let (b1, b2) = (hit.uv[0] as f64, hit.uv[1] as f64);
+        let s = v(0) * (1.0 - b1 - b2) + v(1) * b1 + v(2) * b2;
+        let len = s.length();
+        let s = s / len;
+        if len > 0.0 && s.is_finite() && s.dot(hit.n) > 0.0 {
+            hit.ns = s;
+            hit.smooth = s != hit.n;
+        }
+        hit
     }
 
     /// The closest hit of every ray of `batch` within its t_max (t and primitive, u32::MAX for
@@ -117,9 +169,9 @@ impl Scene {
     }
 
     /// The hit record of `ray` hitting primitive `prim` at distance `t`.
-    #[inline]
+    #[inline(always)]
     pub fn hit_at(&self, ray: &Ray, t: f64, prim: u32) -> Hit {
-        self.prims[prim as usize].shape.hit(ray, t, prim)
+        self.shade(self.prims[prim as usize].shape.hit(ray, t, prim))
     }
 
     /// Index of the first primitive along `ray` within `t_max` (shadow rays: is it the sampled
