@@ -9,6 +9,7 @@ fn main() {
     let result = match &cli.command {
         Some(Command::Render(args)) => cli::render::run(args),
         Some(Command::Converge(args)) => cli::converge::run(args),
+        Some(Command::Merge(args)) => cli::merge::run(args),
         Some(Command::Check(args)) => cli::check::run(args),
         Some(Command::Bench(args)) => cli::bench::run(args),
         Some(Command::Scenes) => {
