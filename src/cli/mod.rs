@@ -121,6 +121,11 @@ pub struct RenderArgs {
     /// that of a render never stopped. Settings come from the film.
     #[arg(long, value_name = "FILM")]
     pub resume: Option<PathBuf>,
+    /// Adaptive shards: take the pilot's map from this film of the same render (any --spp)
+    /// holding passes 0..16 or more, e.g. `render SCENE --spp 16 -o pilot.film`, instead of
+    /// rendering the 16 pilot passes in every shard that does not start at pass 0.
+    #[arg(long, value_name = "FILM")]
+    pub pilot: Option<PathBuf>,
     /// Film file for checkpoints (default: -o when it is a .film).
     #[arg(long, value_name = "FILM")]
     pub checkpoint: Option<PathBuf>,

@@ -1,7 +1,7 @@
 //! `ptui render`: headless progressive render with a progress bar and a summary.
 
 use super::RenderArgs;
-use crate::adaptive::PILOT_PASSES;
+use crate::adaptive::{SampleMap, PILOT_PASSES};
 use crate::error_map;
 use crate::film_file::{self, FilmHeader, FilmStats};
 use crate::output;
@@ -129,15 +129,21 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let pilot_started = std::time::Instant::now();
     let mut pilot_seconds = None;
-    if renderer.needs_pilot() {
-        let map = renderer.pilot_map(&cancel);
-        renderer.set_map(map);
-        pilot_seconds = Some(pilot_started.elapsed().as_secs_f64());
-    }
     let head = FilmHeader {
         shard: shard_text,
         ..FilmHeader::new(&spec, &hash, &settings)
     };
+    if renderer.needs_pilot() {
+        let map = match &args.pilot {
+            Some(path) => Some(pilot_map(path, &head)?),
+            None => {
+                let map = renderer.pilot_map(&cancel);
+                pilot_seconds = Some(pilot_started.elapsed().as_secs_f64());
+                map
+            }
+        };
+        renderer.set_map(map);
+    }
 
     // SIGTERM, SIGINT, SIGHUP: finish the batch, write the checkpoint, exit; a second signal
     // exits at once.
@@ -261,6 +267,32 @@ pub fn film_header(r: &Renderer, head: &FilmHeader) -> FilmHeader {
         error_from_halves: r.error_from_halves(),
         stats: FilmStats::from_render(&r.stats()),
         ..head.clone()
+    }
+}
+
+/// The adaptive map of the render `head` describes, from a film of it (any spp) holding its
+/// pilot passes: the map the film stores, or the one built from its passes 0..16.
+fn pilot_map(path: &Path, head: &FilmHeader) -> anyhow::Result<SampleMap> {
+    let (h, film, map) = film_file::read(path)?;
+    for ((field, a), (_, b)) in head.identity().iter().zip(h.identity()) {
+        if *field != "spp" && *a != b {
+            anyhow::bail!(
+                "--pilot {}: not a film of this render: {field} is {b} there, {a} here",
+                path.display()
+            );
+        }
+    }
+    match (map, h.passes.first()) {
+        (Some(m), _) => Ok(m),
+        (None, Some(r)) if r[0] == 0 && r[1] == PILOT_PASSES => {
+            Ok(SampleMap::build(&film, PILOT_PASSES))
+        }
+        _ => anyhow::bail!(
+            "--pilot {}: holds passes {}, the pilot is passes 0..{PILOT_PASSES} (render it \
+             with --spp {PILOT_PASSES})",
+            path.display(),
+            h.passes_text()
+        ),
     }
 }
 
