@@ -20,12 +20,14 @@ if ! command -v slurmctld >/dev/null || ! command -v munged >/dev/null; then
     DEBIAN_FRONTEND=noninteractive apt-get install -y -qq slurmctld slurmd slurm-client munge >/dev/null
 fi
 work=$(mktemp -d /tmp/ptui-slurm.XXXXXX)
+munge_pid=/nonexistent
 chmod 755 "$work"
 pids=()
 cleanup() {
-    for f in "$work"/slurmd.pid "$work"/slurmctld.pid "$work"/munged.pid; do
+    for f in "$work"/slurmd.pid "$work"/slurmctld.pid "$munge_pid"; do
         [ -f "$f" ] && kill "$(cat "$f")" 2>/dev/null || true
     done
+    rm -f "$munge_pid" 2>/dev/null || true
     sleep 1
     rm -rf "$work"
 }
@@ -37,7 +39,11 @@ mkdir -p /etc/munge /var/lib/munge /var/log/munge /run/munge
 [ -s /etc/munge/munge.key ] || dd if=/dev/urandom of=/etc/munge/munge.key bs=1024 count=1 status=none
 chown -R munge:munge /etc/munge /var/lib/munge /var/log/munge /run/munge
 chmod 700 /etc/munge; chmod 400 /etc/munge/munge.key
-runuser -u munge -- munged --pid-file="$work/munged.pid" 2>/dev/null || true
+# Our own munged unless one is running (then it is left alone).
+munge_pid=/run/munge/ptui-harness.$$.pid
+if ! munge -n 2>/dev/null | unmunge >/dev/null 2>&1; then
+    runuser -u munge -- munged --pid-file="$munge_pid"
+fi
 sleep 0.5
 munge -n | unmunge >/dev/null || { echo "munge does not work"; exit 1; }
 
