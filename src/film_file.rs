@@ -154,6 +154,11 @@ pub struct FilmHeader {
     /// Whether the error estimate reads the half-buffers (stratified samples, or an adaptive
     /// map with light-traced caustics; see `Renderer::error_from_halves`).
     pub error_from_halves: bool,
+    /// Passes of `passes` that were cancelled part-way (a TUI render paused or changed): their
+    /// samples are in the film for the rows they reached. Such a film continues, but does not
+    /// merge (its passes are not whole).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub cancelled: u32,
     /// First pass of the adaptive map stored after the pixels, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map_start: Option<u32>,
@@ -183,6 +188,7 @@ impl FilmHeader {
             until: settings.spp,
             shard: None,
             error_from_halves: settings.sampler.is_stratified(),
+            cancelled: 0,
             map_start: None,
             stats: FilmStats::default(),
         }
@@ -269,6 +275,61 @@ impl FilmHeader {
                 self.until,
                 self.passes_text()
             )));
+        }
+        Ok(())
+    }
+}
+
+/// The header of `r`'s film now: `head`'s render fields with the film's passes, adaptive
+/// flags and counters.
+pub fn header_of(r: &crate::render::Renderer, head: &FilmHeader) -> FilmHeader {
+    let (first, end) = r.pass_range();
+    // Passes started: those complete, and those cancelled part-way (their numbers are used).
+    let done = r.stats().passes;
+    FilmHeader {
+        passes: if done > first {
+            vec![[first, done]]
+        } else {
+            Vec::new()
+        },
+        until: end,
+        error_from_halves: r.error_from_halves(),
+        cancelled: r.stats().passes - r.stats().complete_passes,
+        stats: FilmStats::from_render(&r.stats()),
+        ..head.clone()
+    }
+}
+
+fn is_zero(v: &u32) -> bool {
+    *v == 0
+}
+
+impl FilmHeader {
+    /// The settings layer that renders this film's image (for the TUI's request).
+    pub fn overrides(&self) -> crate::settings::SettingsOverrides {
+        crate::settings::SettingsOverrides {
+            width: Some(self.width),
+            height: Some(self.height),
+            spp: Some(self.spp),
+            seed: Some(self.seed),
+            sampler: Some(self.sampler),
+            integrator: Some(self.integrator),
+            caustics: Some(self.caustics),
+            max_depth: self.max_depth,
+            exposure: Some(self.exposure),
+            tonemap: Some(self.tonemap),
+            adaptive: Some(self.adaptive),
+            ..Default::default()
+        }
+    }
+
+    /// Whether `other` is a film of the same render (any spp): the field that differs, with
+    /// both values, if not.
+    pub fn same_render(&self, other: &FilmHeader) -> Result<(), String> {
+        for ((field, a), (_, b)) in self.identity().iter().zip(other.identity()) {
+            if *field != "spp" && *a != b {
+                return Err(format!("{field} is {b} there, {a} here"));
+            }
         }
         Ok(())
     }

@@ -123,6 +123,8 @@ impl Shard {
 pub enum MergeError {
     #[error(transparent)]
     File(#[from] FilmFileError),
+    #[error("{}: {cancelled} of its passes were cancelled part-way (saved from the TUI while a pass ran): it can be continued (`ptui {}`), not merged", .path.display(), .path.display())]
+    Cancelled { path: PathBuf, cancelled: u32 },
     #[error("nothing to merge: no parts given")]
     NoParts,
     #[error("{} does not belong with {}: {field} is {b} there, {a} in {}", .b_path.display(), .a_path.display(), .a_path.display())]
@@ -198,6 +200,12 @@ pub fn merge(paths: &[PathBuf], require_complete: bool) -> Result<Merged, MergeE
     for p in paths {
         // Only the header now: the reader's buffer is dropped until the part's turn comes.
         let h = film_file::open(p)?.header;
+        if h.cancelled > 0 {
+            return Err(MergeError::Cancelled {
+                path: p.clone(),
+                cancelled: h.cancelled,
+            });
+        }
         parts.push((p.clone(), h));
     }
     let Some((first_path, first)) = parts.first().cloned() else {
@@ -257,7 +265,7 @@ pub fn merge(paths: &[PathBuf], require_complete: bool) -> Result<Merged, MergeE
             parts: parts.len(),
         });
     }
-    let (base_path, base) = parts[0].clone();
+    let base = parts[0].1.clone();
     let mut film = Film::new(base.width, base.height);
     let mut header = FilmHeader {
         passes: covered,
@@ -287,7 +295,6 @@ pub fn merge(paths: &[PathBuf], require_complete: bool) -> Result<Merged, MergeE
             _ => {}
         }
     }
-    let _ = base_path;
     let map = map.map(|(m, _)| m);
     header.map_start = map.as_ref().map(SampleMap::start);
     Ok(Merged {

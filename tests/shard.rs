@@ -451,3 +451,79 @@ fn the_adaptive_map_survives_the_film_file() {
     let map: Option<SampleMap> = map;
     assert_eq!(map.as_ref(), r.sample_map());
 }
+
+/// The TUI's worker saves its film (`w`) and continues a film (`ptui part.film`): a film saved
+/// when a render is done equals `render -o film`'s, and one continued to more passes equals a
+/// render of that many, bit for bit.
+#[test]
+fn the_tui_worker_saves_and_continues_films() {
+    use ptui::settings::SettingsOverrides;
+    use ptui::tui::event::Event;
+    use ptui::tui::worker::{Command, JobStatus, Request, WorkerEvent, WorkerHandle};
+    use std::time::Duration;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (saved, continued) = (dir.path().join("tui.film"), dir.path().join("more.film"));
+    // Run a worker on `layer` (continuing `resume` if given) until done with `spp` passes, then
+    // save its film to `to`.
+    let run = |layer: SettingsOverrides, resume: Option<&Path>, spp: u32, to: &Path| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let w = WorkerHandle::spawn(tx, Duration::from_millis(20)).expect("worker");
+        w.send(Command::Start(Request {
+            id: 1,
+            scene: "cornell".into(),
+            layers: vec![layer],
+            fresh: true,
+        }));
+        if let Some(p) = resume {
+            w.send_after_batch(Command::Resume(p.to_path_buf()));
+        }
+        loop {
+            match rx.recv_timeout(Duration::from_secs(120)).expect("an event") {
+                Event::Render(WorkerEvent::Progress(s))
+                    if s.status == JobStatus::Done && s.stats.complete_passes == spp =>
+                {
+                    break
+                }
+                Event::Render(WorkerEvent::Failed { message, .. })
+                | Event::Render(WorkerEvent::Panicked(message)) => panic!("{message}"),
+                _ => {}
+            }
+        }
+        w.send_after_batch(Command::SaveFilm(to.to_path_buf()));
+        loop {
+            if let Event::Saved(r) = rx.recv_timeout(Duration::from_secs(60)).expect("saved") {
+                assert_eq!(r.expect("the film saved"), to);
+                break;
+            }
+        }
+        w.shutdown();
+    };
+    let layer = SettingsOverrides {
+        width: Some(W),
+        height: Some(H),
+        spp: Some(20),
+        threads: Some(2),
+        ..Default::default()
+    };
+    run(layer, None, 20, &saved);
+    let straight = render_part(
+        "cornell",
+        &settings("cornell", 20, |_| {}),
+        None,
+        &dir.path().join("s20.film"),
+    );
+    let (h, film, _) = film_file::read(&saved).expect("read");
+    assert_eq!((h.passes.clone(), h.cancelled), (vec![[0, 20]], 0));
+    assert!(same_bits(&film, straight.film()));
+    let mut more = h.overrides();
+    more.spp = Some(30);
+    run(more, Some(&saved), 30, &continued);
+    let straight = render_part(
+        "cornell",
+        &settings("cornell", 30, |_| {}),
+        None,
+        &dir.path().join("s30.film"),
+    );
+    let (_, film, _) = film_file::read(&continued).expect("read");
+    assert!(same_bits(&film, straight.film()));
+}

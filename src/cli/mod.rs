@@ -123,7 +123,8 @@ pub struct RenderArgs {
     pub resume: Option<PathBuf>,
     /// Adaptive shards: take the pilot's map from this film of the same render (any --spp)
     /// holding passes 0..16 or more, e.g. `render SCENE --spp 16 -o pilot.film`, instead of
-    /// rendering the 16 pilot passes in every shard that does not start at pass 0.
+    /// rendering the 16 pilot passes in every shard that does not start at pass 0 (the shard
+    /// from pass 0 starts from the film's passes).
     #[arg(long, value_name = "FILM")]
     pub pilot: Option<PathBuf>,
     /// Film file for checkpoints (default: -o when it is a .film).

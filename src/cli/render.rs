@@ -3,7 +3,7 @@
 use super::RenderArgs;
 use crate::adaptive::{SampleMap, PILOT_PASSES};
 use crate::error_map;
-use crate::film_file::{self, FilmHeader, FilmStats};
+use crate::film_file::{self, header_of as film_header, FilmHeader};
 use crate::output;
 use crate::render::Renderer;
 use crate::scene::{self, builtin};
@@ -127,6 +127,23 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         renderer.resume(film, first, next, until, stats, map);
         shard_text = h.shard.clone();
     }
+    // A shard from pass 0 given --pilot starts from the pilot film's passes instead of
+    // rendering them again (with --pilot, the pilot is rendered once in all).
+    if let (Some(path), None, (0, end)) = (&args.pilot, &args.resume, renderer.pass_range()) {
+        if shard.is_some() {
+            let (h, film, map) = film_file::read(path)?;
+            if let Err(e) = FilmHeader::new(&spec, &hash, &settings).same_render(&h) {
+                anyhow::bail!("--pilot {}: not a film of this render: {e}", path.display());
+            }
+            if let [[0, next]] = h.passes[..] {
+                if next <= end && h.cancelled == 0 {
+                    let mut stats = h.stats.to_render();
+                    stats.passes = next;
+                    renderer.resume(film, 0, next, end, stats, map);
+                }
+            }
+        }
+    }
     let pilot_started = std::time::Instant::now();
     let mut pilot_seconds = None;
     let head = FilmHeader {
@@ -168,7 +185,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             .context("progress bar template")?,
     );
     let mut last_checkpoint = std::time::Instant::now();
-    let mut checkpoint_error = None;
     renderer.render(&cancel, |r| {
         bar.set_position(r.stats().complete_passes.saturating_sub(first) as u64);
         bar.set_message(format!(
@@ -184,7 +200,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     film_file::write(path, &film_header(r, &head), r.film(), r.sample_map())
                 {
                     bar.println(format!("warning: checkpoint not written: {e}"));
-                    checkpoint_error = Some(e);
                 }
                 last_checkpoint = std::time::Instant::now();
             }
@@ -192,7 +207,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         true
     });
     bar.finish_and_clear();
-    let _ = checkpoint_error;
 
     let sig = signal.load(Ordering::Relaxed);
     if sig != 0 {
@@ -253,34 +267,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The film header of `r`'s film now: `head`'s render fields, its passes, map and counters.
-pub fn film_header(r: &Renderer, head: &FilmHeader) -> FilmHeader {
-    let (first, end) = r.pass_range();
-    let done = r.stats().complete_passes;
-    FilmHeader {
-        passes: if done > first {
-            vec![[first, done]]
-        } else {
-            Vec::new()
-        },
-        until: end,
-        error_from_halves: r.error_from_halves(),
-        stats: FilmStats::from_render(&r.stats()),
-        ..head.clone()
-    }
-}
-
 /// The adaptive map of the render `head` describes, from a film of it (any spp) holding its
 /// pilot passes: the map the film stores, or the one built from its passes 0..16.
 fn pilot_map(path: &Path, head: &FilmHeader) -> anyhow::Result<SampleMap> {
     let (h, film, map) = film_file::read(path)?;
-    for ((field, a), (_, b)) in head.identity().iter().zip(h.identity()) {
-        if *field != "spp" && *a != b {
-            anyhow::bail!(
-                "--pilot {}: not a film of this render: {field} is {b} there, {a} here",
-                path.display()
-            );
-        }
+    if let Err(e) = head.same_render(&h) {
+        anyhow::bail!("--pilot {}: not a film of this render: {e}", path.display());
     }
     match (map, h.passes.first()) {
         (Some(m), _) => Ok(m),
