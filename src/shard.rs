@@ -344,22 +344,20 @@ mod tests {
             ("SLURM_ARRAY_TASK_COUNT", "8"),
         ]);
         assert_eq!(
-            Shard::from_env(None, &slurm),
+            Shard::from_env(None, slurm),
             Ok(Shard { index: 4, count: 8 })
         );
-        assert!(Shard::from_env(Some(4), &slurm)
+        assert!(Shard::from_env(Some(4), slurm)
             .unwrap_err()
             .contains("disagrees"));
         let k8s = env(&[("JOB_COMPLETION_INDEX", "3")]);
-        assert!(Shard::from_env(None, &k8s)
-            .unwrap_err()
-            .contains("--shards"));
+        assert!(Shard::from_env(None, k8s).unwrap_err().contains("--shards"));
         assert_eq!(
-            Shard::from_env(Some(4), &k8s),
+            Shard::from_env(Some(4), k8s),
             Ok(Shard { index: 3, count: 4 })
         );
         let aws = env(&[("AWS_BATCH_JOB_ARRAY_INDEX", "9")]);
-        assert!(Shard::from_env(Some(4), &aws)
+        assert!(Shard::from_env(Some(4), aws)
             .unwrap_err()
             .contains("out of range"));
         assert!(Shard::from_env(Some(4), env(&[])).is_err());
