@@ -145,6 +145,24 @@ impl SampleMap {
         }
     }
 
+    /// A map from its stored weights (a film file's), `start` its first pass.
+    pub fn from_weights(start: u32, width: u32, weight: Vec<u8>) -> SampleMap {
+        let total: f64 = weight.iter().map(|&q| 1.0 + q as f64 / STEPS).sum();
+        let max = weight.iter().copied().max().unwrap_or(0);
+        SampleMap {
+            start,
+            width,
+            mean: total / weight.len().max(1) as f64,
+            max: 1.0 + max as f64 / STEPS,
+            weight,
+        }
+    }
+
+    /// The per-pixel weights (1 + q / 16 samples per pass), row-major.
+    pub fn weights(&self) -> &[u8] {
+        &self.weight
+    }
+
     /// Samples per pass of pixel (x, y), on average.
     #[inline]
     pub fn weight(&self, x: u32, y: u32) -> f64 {

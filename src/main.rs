@@ -9,6 +9,7 @@ fn main() {
     let result = match &cli.command {
         Some(Command::Render(args)) => cli::render::run(args),
         Some(Command::Converge(args)) => cli::converge::run(args),
+        Some(Command::Merge(args)) => cli::merge::run(args),
         Some(Command::Check(args)) => cli::check::run(args),
         Some(Command::Bench(args)) => cli::bench::run(args),
         Some(Command::Scenes) => {
@@ -17,19 +18,59 @@ fn main() {
             }
             Ok(())
         }
-        None => tui::run(TuiOptions {
-            scene: cli.scene.clone().unwrap_or_else(|| builtin::DEFAULT.into()),
-            cli: cli.settings.overrides(),
-            color: cli.tui.color,
-            fps: cli.tui.fps,
-            halfblock: !cli.tui.spaces,
-            bench_log: cli.tui.bench_log.clone(),
+        None => tui_film(cli.scene.as_deref()).and_then(|film| {
+            let (scene, layer, resume) = match film {
+                Some((scene, layer, path)) => (scene, layer, Some(path)),
+                None => (
+                    cli.scene.clone().unwrap_or_else(|| builtin::DEFAULT.into()),
+                    cli.settings.overrides(),
+                    None,
+                ),
+            };
+            tui::run(TuiOptions {
+                scene,
+                cli: layer,
+                color: cli.tui.color,
+                fps: cli.tui.fps,
+                halfblock: !cli.tui.spaces,
+                bench_log: cli.tui.bench_log.clone(),
+                resume,
+            })
         }),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
+}
+
+/// `ptui part.film`: the film's scene and settings, checked against the scene as it is now.
+fn tui_film(
+    arg: Option<&str>,
+) -> anyhow::Result<
+    Option<(
+        String,
+        ptui::settings::SettingsOverrides,
+        std::path::PathBuf,
+    )>,
+> {
+    let Some(path) = arg.map(std::path::Path::new) else {
+        return Ok(None);
+    };
+    if !ptui::film_file::is_film_path(path) {
+        return Ok(None);
+    }
+    let h = ptui::film_file::open(path)?.header;
+    let hash = ptui::film_file::scene_hash(&h.scene).map_err(|e| anyhow::anyhow!(e))?;
+    if hash != h.scene_hash {
+        anyhow::bail!(
+            "{}: its scene {} has changed since (scene_hash {} there, {hash} now)",
+            path.display(),
+            h.scene,
+            h.scene_hash
+        );
+    }
+    Ok(Some((h.scene.clone(), h.overrides(), path.to_path_buf())))
 }
 
 /// glibc raises its mmap threshold each time a large block is freed (up to 32 MB), and blocks

@@ -104,6 +104,11 @@ pub struct Renderer {
     ahead: Option<(u32, PassSplats)>,
     /// The most passes' light paths alive at once in any batch so far (for the tests).
     most_light_alive: usize,
+    /// The first pass this film holds (0 but for a shard) and the pass the render stops at
+    /// (None: `settings.spp`, which the TUI may raise on a running render): see
+    /// [`Renderer::set_range`].
+    first_pass: u32,
+    end_pass: Option<u32>,
 }
 
 /// A rayon pool with `threads` workers (0 = one per core).
@@ -148,6 +153,8 @@ impl Renderer {
             map: None,
             ahead: None,
             most_light_alive: 0,
+            first_pass: 0,
+            end_pass: None,
         })
     }
 
@@ -217,7 +224,7 @@ impl Renderer {
 
     /// Whether the target sample count or the target error has been reached.
     pub fn done(&self) -> bool {
-        self.stats.complete_passes >= self.settings.spp || self.target_error_reached()
+        self.stats.complete_passes >= self.end() || self.target_error_reached()
     }
 
     /// Whether `settings.target_error` is set and the estimated relative error after the last
@@ -278,8 +285,7 @@ impl Renderer {
         // the render stops after this batch by its sample count. Not on large passes (over
         // 1 MiB of ends: two passes' would then be alive at once), which have enough chunks to
         // share between the cores evenly anyway.
-        let left_after =
-            (settings.spp.saturating_sub(self.stats.complete_passes)).saturating_sub(n);
+        let left_after = (self.end().saturating_sub(self.stats.complete_passes)).saturating_sub(n);
         let after = tracer
             .filter(|t| !t.large_passes() && left_after > 0)
             .map(|_| first + n);
@@ -323,10 +329,86 @@ impl Renderer {
     /// Complete passes still to run by the sample count (at least one: a render past its count
     /// only runs when asked to).
     fn passes_left(&self) -> u32 {
-        self.settings
-            .spp
-            .saturating_sub(self.stats.complete_passes)
-            .max(1)
+        self.end().saturating_sub(self.stats.complete_passes).max(1)
+    }
+
+    /// The pass the render stops at.
+    fn end(&self) -> u32 {
+        self.end_pass.unwrap_or(self.settings.spp)
+    }
+
+    /// Render passes `first..end` only (a shard of a render; `end` at most `settings.spp`),
+    /// into the (empty) film. Pass numbers, hence random numbers, are those of the whole
+    /// render. With adaptive sampling a shard past the first pass needs the map the whole
+    /// render builds after its pilot: [`Renderer::pilot_map`] renders the pilot for it.
+    pub fn set_range(&mut self, first: u32, end: u32) {
+        self.first_pass = first;
+        self.end_pass = Some(end);
+        self.stats.passes = first;
+        self.stats.complete_passes = first;
+        self.ahead = None;
+    }
+
+    /// Continue a film: `film` holds passes `first..next` with `stats` (their counters), the
+    /// render goes on from pass `next` to `end` with the adaptive map `map` (if the pilot is
+    /// over), exactly as if it had never stopped.
+    pub fn resume(
+        &mut self,
+        film: Film,
+        first: u32,
+        next: u32,
+        end: u32,
+        stats: RenderStats,
+        map: Option<SampleMap>,
+    ) {
+        self.set_range(first, end);
+        self.film = film;
+        self.stats = RenderStats {
+            passes: next,
+            complete_passes: next,
+            ..stats
+        };
+        self.map = map;
+    }
+
+    /// Stop at pass `end`, or (None) at `settings.spp` as it changes (the TUI's).
+    pub fn set_end(&mut self, end: Option<u32>) {
+        self.end_pass = end;
+    }
+
+    /// Give the render the adaptive map of the whole render (a shard's, built by
+    /// [`Renderer::pilot_map`]).
+    pub fn set_map(&mut self, map: Option<SampleMap>) {
+        self.map = map;
+    }
+
+    /// The first pass the film holds and the pass the render stops at.
+    pub fn pass_range(&self) -> (u32, u32) {
+        (self.first_pass, self.end())
+    }
+
+    /// Whether this render needs [`Renderer::pilot_map`]: adaptive, past the pilot before it
+    /// ends, and its film does not hold the pilot's passes from pass 0.
+    pub fn needs_pilot(&self) -> bool {
+        self.adaptive() && self.map.is_none() && self.first_pass > 0 && self.end() > PILOT_PASSES
+    }
+
+    /// The adaptive map of the whole render: its pilot passes rendered on a film of their own
+    /// (on this render's pool), and the map built from it at the pass the whole render builds
+    /// it. The cost of a shard that does not start at pass 0: PILOT_PASSES uniform passes.
+    pub fn pilot_map(&self, cancel: &AtomicBool) -> Option<SampleMap> {
+        let mut pilot =
+            Renderer::with_pool(self.scene.clone(), self.settings.clone(), self.pool.clone())
+                .ok()?;
+        pilot.set_range(0, PILOT_PASSES);
+        while !pilot.done() {
+            let n = pilot.default_batch();
+            if pilot.run_passes(cancel, n) == PassOutcome::Cancelled {
+                return None;
+            }
+        }
+        let film = &pilot.film;
+        Some(self.pool.install(|| SampleMap::build(film, PILOT_PASSES)))
     }
 
     /// How many of up to `max` passes the next batch takes: no more than the sample count

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod check;
 pub mod converge;
+pub mod merge;
 pub mod render;
 pub mod tui;
 
@@ -35,6 +36,9 @@ pub enum Command {
     Render(RenderArgs),
     /// Measure error against render time for one or more integrators: CSV + log-log plot.
     Converge(converge::ConvergeArgs),
+    /// Merge film files (shards of one render, `render --shard I/N -o part.film`) into an
+    /// image or another film.
+    Merge(merge::MergeArgs),
     /// List the built-in scenes.
     Scenes,
     /// Render scenes briefly and test them against their `[check]` expectations (default: all of
@@ -98,9 +102,37 @@ pub struct RenderArgs {
     pub scene: Option<String>,
     #[command(flatten)]
     pub settings: SettingsArgs,
-    /// Output image (.png tonemapped, .exr linear).
-    #[arg(short, long, default_value = "render.png")]
-    pub output: PathBuf,
+    /// Output: .png tonemapped, .exr linear, .film the whole film (to merge or resume; see
+    /// docs/FILM.md). Default render.png; with --resume, the resumed film.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Render shard I of N (0-based): passes I*spp/N .. (I+1)*spp/N of the render, into a
+    /// film (-o part.film) for `ptui merge`.
+    #[arg(long, value_name = "I/N", conflicts_with_all = ["shard_from_env", "resume"])]
+    pub shard: Option<crate::shard::Shard>,
+    /// Take the shard from the scheduler: SLURM_ARRAY_TASK_ID (of SLURM_ARRAY_TASK_COUNT),
+    /// JOB_COMPLETION_INDEX (Kubernetes) or AWS_BATCH_JOB_ARRAY_INDEX, with --shards N.
+    #[arg(long, conflicts_with = "resume")]
+    pub shard_from_env: bool,
+    /// The shard count where the scheduler gives none (with --shard-from-env).
+    #[arg(long, value_name = "N", requires = "shard_from_env", value_parser = clap::value_parser!(u32).range(1..))]
+    pub shards: Option<u32>,
+    /// Continue a film file where it stopped (to its own end, or to --spp N); the result is
+    /// that of a render never stopped. Settings come from the film.
+    #[arg(long, value_name = "FILM")]
+    pub resume: Option<PathBuf>,
+    /// Adaptive shards: take the pilot's map from this film of the same render (any --spp)
+    /// holding passes 0..16 or more, e.g. `render SCENE --spp 16 -o pilot.film`, instead of
+    /// rendering the 16 pilot passes in every shard that does not start at pass 0 (the shard
+    /// from pass 0 starts from the film's passes).
+    #[arg(long, value_name = "FILM")]
+    pub pilot: Option<PathBuf>,
+    /// Film file for checkpoints (default: -o when it is a .film).
+    #[arg(long, value_name = "FILM")]
+    pub checkpoint: Option<PathBuf>,
+    /// Write the checkpoint this often while rendering, e.g. 30s, 10m, 1h.
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
+    pub checkpoint_every: Option<std::time::Duration>,
     /// Print no progress bar.
     #[arg(short, long)]
     pub quiet: bool,
@@ -215,6 +247,25 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         Ok(n)
     };
     Ok((dim(w)?, dim(h)?))
+}
+
+/// A duration as a number and a unit: 90s, 10m, 1.5h (a bare number is seconds).
+pub fn parse_duration(s: &str) -> Result<std::time::Duration, String> {
+    let t = s.trim();
+    let (num, scale) = match t.char_indices().last() {
+        Some((i, 's')) => (&t[..i], 1.0),
+        Some((i, 'm')) => (&t[..i], 60.0),
+        Some((i, 'h')) => (&t[..i], 3600.0),
+        _ => (t, 1.0),
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a duration like 30s, 10m or 1h, got `{s}`"))?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("the duration must be positive, got `{s}`"));
+    }
+    std::time::Duration::try_from_secs_f64(v * scale).map_err(|e| format!("`{s}`: {e}"))
 }
 
 pub fn parse_positive(s: &str) -> Result<f64, String> {

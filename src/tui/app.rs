@@ -20,6 +20,8 @@ pub enum Action {
     Start(Request),
     Pause(bool),
     Save(SaveKind),
+    /// Write the whole film (`w`), to merge or continue later.
+    SaveFilm,
     Quit,
 }
 
@@ -316,6 +318,7 @@ impl App {
             }
             KeyCode::Char('s') => return self.save(SaveKind::Png),
             KeyCode::Char('e') => return self.save(SaveKind::Exr),
+            KeyCode::Char('w') => return self.save_film(),
             KeyCode::Char('r') => return Some(Action::Start(self.request(true))),
             KeyCode::Char('c') => {
                 self.color_mode = self.color_mode.toggled();
@@ -389,6 +392,15 @@ impl App {
             // size, ...): the worker goes on with the film only if it would not.
             _ => Some(Action::Start(self.request(false))),
         }
+    }
+
+    fn save_film(&mut self) -> Option<Action> {
+        if self.snapshot.is_none() {
+            self.message = Some(Message::Error("nothing rendered yet".into()));
+            return None;
+        }
+        self.message = Some(Message::Info("saving film…".into()));
+        Some(Action::SaveFilm)
     }
 
     fn save(&mut self, kind: SaveKind) -> Option<Action> {

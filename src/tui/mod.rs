@@ -41,6 +41,8 @@ pub struct TuiOptions {
     /// Append a line per second with bytes written to the terminal and render progress, and a
     /// line per key press with its key-to-flush latency (for the measuring harness).
     pub bench_log: Option<PathBuf>,
+    /// A film file to continue (`ptui part.film`): `scene` and `cli` are then the film's.
+    pub resume: Option<PathBuf>,
 }
 
 pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
@@ -65,6 +67,9 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
     );
     let first = app.request(true);
     worker.send(Command::Start(first));
+    if let Some(path) = &opts.resume {
+        worker.send_after_batch(Command::Resume(path.clone()));
+    }
 
     let mut guard = term::TermGuard::enter().context("cannot set up the terminal")?;
     event::spawn_input(tx.clone())?;
@@ -130,6 +135,9 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                                 );
                             }
                         }
+                        Some(Action::SaveFilm) => {
+                            worker.send_after_batch(Command::SaveFilm(film_path(&app)));
+                        }
                         Some(Action::Quit) | None => {}
                     }
                 }
@@ -184,6 +192,22 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
         Some(e) => Err(anyhow::anyhow!(e)),
         None => Ok(()),
     }
+}
+
+/// Where `w` saves the film: beside the PNG and EXR saves, named like them.
+fn film_path(app: &App) -> PathBuf {
+    let unix = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let spp = app.snapshot.as_ref().map_or(0, |s| s.stats.complete_passes);
+    save::file_name(
+        std::path::Path::new("."),
+        &app.scene_name,
+        spp,
+        unix,
+        save::SaveKind::Png,
+    )
+    .with_extension("film")
 }
 
 /// One frame inside a synchronized update.

@@ -11,6 +11,7 @@
 
 use super::event::Event;
 use crate::film::{ErrorEstimate, MeanImage};
+use crate::film_file::{self, FilmHeader};
 use crate::render::{PassOutcome, RenderError, RenderStats, Renderer};
 use crate::scene::{self, Scene};
 use crate::settings::{RenderSettings, SettingsOverrides};
@@ -38,6 +39,10 @@ pub struct Request {
 #[derive(Debug)]
 pub enum Command {
     Start(Request),
+    /// Write the film to this file (`w`; see `film_file`).
+    SaveFilm(std::path::PathBuf),
+    /// Continue the film in this file in the current job (`ptui part.film`).
+    Resume(std::path::PathBuf),
     Pause(bool),
     Quit,
 }
@@ -127,6 +132,12 @@ impl WorkerHandle {
             cancel,
             thread: Some(thread),
         })
+    }
+
+    /// Queue a command to be taken after the running batch of passes (a frame's worth): a film
+    /// saved then holds whole passes only.
+    pub fn send_after_batch(&self, cmd: Command) {
+        let _ = self.tx.send(cmd);
     }
 
     /// Queue a command and interrupt the running pass so it is taken promptly.
@@ -256,6 +267,16 @@ impl Worker {
                     }
                 }
             }
+            Command::SaveFilm(path) => {
+                let result = self.save_film(&path).map(|()| path);
+                let _ = self.events.send(Event::Saved(result));
+            }
+            Command::Resume(path) => {
+                if let Err(e) = self.resume_film(&path) {
+                    let msg = format!("cannot continue {}: {e}", path.display());
+                    self.send(WorkerEvent::Panicked(msg));
+                }
+            }
             Command::Start(req) => {
                 if let Err(message) = self.start(&req) {
                     self.send(WorkerEvent::Failed {
@@ -377,6 +398,54 @@ impl Worker {
             .as_ref()
             .is_some_and(|j| j.status != JobStatus::Running);
         self.snapshot(changed);
+    }
+
+    /// Write the current film to `path` (the `w` key).
+    fn save_film(&self, path: &std::path::Path) -> Result<(), String> {
+        let (Some(job), Some((spec, _))) = (&self.job, &self.scene) else {
+            return Err("nothing rendered yet".into());
+        };
+        let hash = film_file::scene_hash(spec)?;
+        let head = FilmHeader::new(spec, &hash, &job.renderer.settings);
+        let header = film_file::header_of(&job.renderer, &head);
+        film_file::write(
+            path,
+            &header,
+            job.renderer.film(),
+            job.renderer.sample_map(),
+        )
+        .map_err(|e| e.to_string())
+    }
+
+    /// Continue the film in `path` in the current job, started with the film's settings.
+    fn resume_film(&mut self, path: &std::path::Path) -> Result<(), String> {
+        let (h, film, map) = film_file::read(path).map_err(|e| e.to_string())?;
+        let (Some(job), Some((spec, _))) = (&mut self.job, &self.scene) else {
+            return Err("no render to continue".into());
+        };
+        let hash = film_file::scene_hash(spec)?;
+        let head = FilmHeader::new(spec, &hash, &job.renderer.settings);
+        head.same_render(&h)
+            .map_err(|e| format!("not a film of this render: {e}"))?;
+        let (first, next) = match h.passes.as_slice() {
+            [] => (0, 0),
+            [r] => (r[0], r[1]),
+            _ => return Err(format!("its passes {} have gaps", h.passes_text())),
+        };
+        let mut stats = h.stats.to_render();
+        stats.passes = next;
+        job.renderer.resume(film, first, next, h.until, stats, map);
+        if h.shard.is_none() {
+            job.renderer.set_end(None);
+        }
+        if job.renderer.needs_pilot() {
+            let map = job.renderer.pilot_map(&AtomicBool::new(false));
+            job.renderer.set_map(map);
+        }
+        job.status = JobStatus::Running;
+        self.update_status();
+        self.snapshot(true);
+        Ok(())
     }
 
     /// Send a snapshot if forced or the last one is older than the minimum interval.
