@@ -74,6 +74,20 @@ fn cornell_mesh_is_unbiased_against_mitsuba() {
     assert_converges_to(r, &reference, ref_noise);
 }
 
+/// The relative standard deviation of an RMSE measured over the image's pixels and channels,
+/// from the spread of their squared errors (the delta method: half that of the mean square).
+fn rmse_spread(x: &[f32], reference: &[f32]) -> f64 {
+    let sq: Vec<f64> = x
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| (*a as f64 - *b as f64).powi(2))
+        .collect();
+    let n = sq.len() as f64;
+    let mean = sq.iter().sum::<f64>() / n;
+    let var = sq.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    0.5 * (var / n).sqrt() / mean
+}
+
 /// The `noise_rmse = ...` line of a reference's noise estimate (written by its harness).
 fn noise_rmse(path: &Path) -> f64 {
     let text = std::fs::read_to_string(path)
@@ -99,6 +113,7 @@ fn noise_rmse(path: &Path) -> f64 {
 /// 1/sqrt(spp), and that each channel's mean is the reference's within 0.5% at 1024 spp.
 fn assert_converges_to(mut r: Renderer, reference: &reference::LinearImage, ref_noise: f64) {
     let mut rows = Vec::new();
+    let mut spread = Vec::new();
     // Pass by pass (`render` runs batches of them) to measure at exact sample counts.
     while !r.done() {
         r.run_pass(&AtomicBool::new(false));
@@ -107,6 +122,7 @@ fn assert_converges_to(mut r: Renderer, reference: &reference::LinearImage, ref_
             let img = r.film().mean_rgb_f32();
             let measured = reference::rmse(&img, &reference.data);
             rows.push((spp, measured, reference::channel_means(&img)));
+            spread.push(rmse_spread(&img, &reference.data));
         }
     }
     assert_eq!(r.stats().invalid, 0);
@@ -128,13 +144,18 @@ fn assert_converges_to(mut r: Renderer, reference: &reference::LinearImage, ref_
         (slope + 0.5).abs() < 0.05,
         "slope {slope:.3}, expected -0.5"
     );
-    // Every checkpoint on the line C / sqrt(spp) within 5%.
+    // Every checkpoint on the line C / sqrt(spp) within 5%, or within 3 standard deviations of
+    // the RMSE itself where a few pixels carry most of the squared error (a quad light's
+    // partly covered edge pixels on cornell-mesh: there the RMSE is only known to ~6%).
     let c = (points.iter().map(|(x, y)| y + 0.5 * x).sum::<f64>() / points.len() as f64).exp();
-    for ((spp, rmse, _), (x, y)) in rows.iter().zip(&points) {
+    for (((spp, rmse, _), (x, y)), sd) in rows.iter().zip(&points).zip(&spread) {
         let predicted = c * (-0.5 * x).exp();
+        let tolerance = (3.0 * sd).max(0.05);
         assert!(
-            (y.exp() / predicted - 1.0).abs() < 0.05,
-            "{spp} spp: rmse {rmse:.5} off the 1/sqrt(spp) line ({predicted:.5})"
+            (y.exp() / predicted - 1.0).abs() < tolerance,
+            "{spp} spp: rmse {rmse:.5} off the 1/sqrt(spp) line ({predicted:.5}) by more than \
+             {:.1}%",
+            100.0 * tolerance
         );
     }
     // Mean radiance per channel within 0.5% at 1024 spp.

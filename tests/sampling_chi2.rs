@@ -200,6 +200,7 @@ fn diffuse_about_a_shading_normal(name: &str, wo: DVec3) {
         kind: MaterialKind::Diffuse,
         color: DVec3::new(0.2, 0.5, 0.9),
         emission: DVec3::ZERO,
+        one_sided: false,
     };
     let g = DVec3::new(0.3, 0.4, -0.866).normalize();
     let tilt = Frame::from_normal(g).to_world(DVec3::new(

@@ -438,6 +438,7 @@ mod tests {
             kind: MaterialKind::Diffuse,
             color: DVec3::splat(0.8),
             emission: DVec3::ZERO,
+            one_sided: false,
         };
         let mut rng = Rng::new(17);
         let mut checked = 0;
