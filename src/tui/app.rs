@@ -6,7 +6,7 @@ use super::form::{Field, Form, Shown};
 use super::preview::{PreviewCache, ViewState};
 use super::save::SaveKind;
 use super::view;
-use super::worker::{JobStatus, Request, Snapshot, WorkerEvent};
+use super::worker::{BuildNotes, JobStatus, Request, Snapshot, WorkerEvent};
 use crate::settings::{RenderSettings, SettingsOverrides};
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use ratatui::layout::Rect;
@@ -38,8 +38,8 @@ pub struct App {
     /// The `[render]` table of the scene the worker last loaded.
     pub scene_render: SettingsOverrides,
     pub scene_name: String,
-    /// What the scene build chose (accelerator, light sampling).
-    pub report: String,
+    /// What the scene build and the renderer chose (accelerator, light sampling, caustics).
+    pub notes: BuildNotes,
     pub threads: usize,
     pub snapshot: Option<Arc<Snapshot>>,
     /// A snapshot received but not yet turned into preview colours (done once per frame).
@@ -48,6 +48,10 @@ pub struct App {
     /// Half-block preview (two sub-pixels per cell) or background-coloured spaces only.
     pub halfblock: bool,
     pub show_help: bool,
+    /// The details view (`i`): settings, timings and the build notes in full.
+    pub show_details: bool,
+    /// `--color auto` fell back to 256 colours: say how to get truecolor, until the first key.
+    pub color_hint: bool,
     pub show_chart: bool,
     pub view: ViewState,
     pub preview: PreviewCache,
@@ -80,13 +84,15 @@ impl App {
             cli,
             scene_render: SettingsOverrides::default(),
             scene_name: scene,
-            report: String::new(),
+            notes: BuildNotes::default(),
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             snapshot: None,
             pending: None,
             color_mode,
             halfblock,
             show_help: false,
+            show_details: false,
+            color_hint: color == ColorChoice::Auto && color_mode == ColorMode::Ansi256,
             show_chart: false,
             view: ViewState::default(),
             preview: PreviewCache::default(),
@@ -199,13 +205,13 @@ impl App {
                 settings: _,
                 scene_render,
                 scene_name,
-                report,
+                notes,
                 threads,
                 ..
             } => {
                 self.scene_render = scene_render;
                 self.scene_name = scene_name;
-                self.report = report;
+                self.notes = notes;
                 self.threads = threads;
                 self.worker_panic = None;
                 if request == self.next_request {
@@ -282,8 +288,11 @@ impl App {
             self.quit = true;
             return Some(Action::Quit);
         }
-        if self.show_help {
+        // The colour hint has been seen once a key is pressed.
+        self.color_hint = false;
+        if self.show_help || self.show_details {
             self.show_help = false;
+            self.show_details = false;
             return None;
         }
         if self.form.editing.is_some() {
@@ -295,6 +304,7 @@ impl App {
                 return Some(Action::Quit);
             }
             KeyCode::Char('?') => self.show_help = true,
+            KeyCode::Char('i') => self.show_details = true,
             KeyCode::Tab => self.form.select_next(true, self.settings().integrator),
             KeyCode::BackTab => self.form.select_next(false, self.settings().integrator),
             KeyCode::Enter => {
@@ -628,7 +638,7 @@ mod tests {
             settings: app.settings(),
             scene_render: SettingsOverrides::default(),
             scene_name: "cornell".into(),
-            report: String::new(),
+            notes: BuildNotes::default(),
             threads: 1,
         });
         press(&mut app, &[KeyCode::Tab; 5]);

@@ -8,6 +8,7 @@
 
 pub mod app;
 pub mod color;
+pub mod dither;
 pub mod event;
 pub mod form;
 pub mod preview;

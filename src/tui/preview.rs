@@ -6,11 +6,12 @@
 //! since cells are about twice as tall as wide. In space mode (for terminals that draw '▀' wide)
 //! a cell is one sub-pixel, a background-coloured space, twice as tall as wide.
 //!
-//! The cache keeps the colour last shown per sub-pixel; it is recomputed in place when a new
-//! snapshot arrives or the view changes, never per frame, and drawing only copies it into the
-//! ratatui buffer.
+//! The cache keeps the colour last shown per sub-pixel, and its 256-colour dither plan; both are
+//! recomputed in place when a new snapshot arrives or the view changes, never per frame, and
+//! drawing only copies them into the ratatui buffer.
 
 use super::color::ColorMode;
+use super::dither::{plan_for, Plan};
 use super::worker::Snapshot;
 use crate::output::display_rgb;
 use crate::settings::Tonemap;
@@ -131,6 +132,8 @@ struct Key {
 pub struct PreviewCache {
     key: Option<Key>,
     shown: Vec<Option<[u8; 3]>>,
+    /// The 256-colour dither plan of each shown colour (same layout).
+    plans: Vec<Plan>,
     /// Sub-pixels whose colour changed at the last update (for measuring the hysteresis).
     pub changed: usize,
 }
@@ -163,6 +166,8 @@ impl PreviewCache {
         if fresh {
             self.shown.clear();
             self.shown.resize(len, None);
+            self.plans.clear();
+            self.plans.resize(len, Plan::default());
         }
         self.key = Some(key);
         self.changed = 0;
@@ -193,6 +198,7 @@ impl PreviewCache {
                 };
                 if moved {
                     *cell = Some(rgb);
+                    self.plans[at] = plan_for(rgb);
                     self.changed += 1;
                 }
             }
@@ -216,10 +222,13 @@ impl PreviewCache {
             for cx in 0..area.width {
                 let (x, y) = (area.x + cx, area.y + cy);
                 let sub = |k: u16| -> Color {
-                    let sy = cy * per_cell + k;
-                    match self.shown[sy as usize * stride + cx as usize] {
-                        Some(rgb) => mode.color(rgb, x, y * per_cell + k),
-                        None => Color::Reset,
+                    let at = (cy * per_cell + k) as usize * stride + cx as usize;
+                    match (self.shown[at], mode) {
+                        (None, _) => Color::Reset,
+                        (Some([r, g, b]), ColorMode::Truecolor) => Color::Rgb(r, g, b),
+                        (Some(_), ColorMode::Ansi256) => {
+                            Color::Indexed(self.plans[at].at(x, y * per_cell + k))
+                        }
                     }
                 };
                 let Some(cell) = buf.cell_mut((x, y)) else {

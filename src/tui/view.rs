@@ -97,6 +97,8 @@ pub fn draw(frame: &mut Frame, app: &App) {
     draw_status(frame, app, areas.status);
     if app.show_help {
         draw_help(frame, area);
+    } else if app.show_details {
+        draw_details(frame, app, area);
     }
 }
 
@@ -129,17 +131,73 @@ fn draw_title(frame: &mut Frame, app: &App, area: Rect) {
     } else {
         "spaces"
     };
-    let left = Line::from(vec![
+    let help = "? help  i details ";
+    let room = if area.width >= 60 {
+        area.width as usize - help.len()
+    } else {
+        area.width as usize
+    };
+    let scene = clip_left(&app.scene_name, 24);
+    let parts = vec![
         Span::styled(" ptui ", Style::new().bold().reversed()),
-        Span::raw(format!("  {} {}x{}  ", app.scene_name, s.width, s.height)),
-        Span::styled(state_name(app), Style::new().bold()),
-        Span::raw(format!("  zoom {zoom}  {mode}  {shape}")),
-    ]);
-    frame.render_widget(left, area);
-    let help = Line::from("? help ").right_aligned().dark_gray();
+        Span::raw(format!("  {scene} {}x{}", s.width, s.height)),
+        Span::styled(format!("  {}", state_name(app)), Style::new().bold()),
+        Span::raw(format!("  zoom {zoom}")),
+        Span::raw(format!("  {mode}")),
+        Span::raw(format!("  {shape}")),
+    ];
+    frame.render_widget(fit_parts(parts, room), area);
     if area.width >= 60 {
-        frame.render_widget(help, area);
+        frame.render_widget(Line::from(help).right_aligned().dark_gray(), area);
     }
+}
+
+/// The spans of `parts` that fit in `width` columns, in order; a part that does not fit whole
+/// is left out (never cut mid-word), and the later, smaller ones still get their chance.
+fn fit_parts(parts: Vec<Span<'_>>, width: usize) -> Line<'_> {
+    let mut used = 0;
+    let mut kept = Vec::new();
+    for p in parts {
+        let w = p.width();
+        if used + w <= width {
+            used += w;
+            kept.push(p);
+        }
+    }
+    Line::from(kept)
+}
+
+/// `s` within `w` columns, cut at a word boundary with an ellipsis if it is longer.
+fn clip_words(s: &str, w: usize) -> String {
+    if s.chars().count() <= w {
+        return s.to_string();
+    }
+    let head: String = s.chars().take(w.saturating_sub(1)).collect();
+    match head.rfind(' ') {
+        Some(i) if i > 0 => format!("{}…", head[..i].trim_end()),
+        _ if w > 0 => format!("{head}…"),
+        _ => String::new(),
+    }
+}
+
+/// Words of `s` in lines of at most `w` columns (a longer word gets a line of its own, cut).
+fn wrap_words(s: &str, w: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in s.split_whitespace() {
+        let (n, m) = (line.chars().count(), word.chars().count());
+        if n > 0 && n + 1 + m > w {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    if !line.is_empty() || lines.is_empty() {
+        lines.push(line);
+    }
+    lines.into_iter().map(|l| clip_right(&l, w)).collect()
 }
 
 fn draw_form(frame: &mut Frame, app: &App, area: Rect) {
@@ -270,55 +328,102 @@ fn draw_gauge(frame: &mut Frame, app: &App, area: Rect) {
     frame.render_widget(gauge, area);
 }
 
+/// How to get truecolor when `auto` chose 256 colours, longest first: the status line shows the
+/// longest that fits, the details view the first.
+pub const COLOR_HINTS: [&str; 4] = [
+    "256 colours (auto): for truecolor set COLORTERM=truecolor, in tmux \
+     set -as terminal-features ',*:RGB', or press c",
+    "256 colours: for truecolor set COLORTERM=truecolor (tmux: terminal-features RGB) or press c",
+    "256 colours: press c for truecolor, i for how to get it by default",
+    "256 colours: c for truecolor",
+];
+
 fn draw_status(frame: &mut Frame, app: &App, area: Rect) {
     let [first, second] =
         Layout::vertical([Constraint::Length(1), Constraint::Length(1)]).areas(area);
-    let stats = match &app.snapshot {
-        Some(snap) => {
-            let err = if snap.error.rmse.is_finite() {
-                format!(
-                    "est. error {:.4} (rel {:.3})",
-                    snap.error.rmse,
-                    snap.error.relative()
-                )
+    let width = area.width as usize;
+    if let Some(snap) = &app.snapshot {
+        let err = if snap.error.rmse.is_finite() {
+            format!(
+                " · est. error {:.4} (rel {:.3})",
+                snap.error.rmse,
+                snap.error.relative()
+            )
+        } else {
+            " · est. error --".into()
+        };
+        let invalid = Span::styled(
+            format!(" · invalid {}", snap.stats.invalid),
+            if snap.stats.invalid > 0 {
+                Style::new().red()
             } else {
-                "est. error --".into()
-            };
-            let invalid = Span::styled(
-                format!("invalid {}", snap.stats.invalid),
-                if snap.stats.invalid > 0 {
-                    Style::new().red()
-                } else {
-                    Style::new()
-                },
-            );
-            Line::from(vec![
-                Span::raw(format!(
-                    " {} spp{} · {:.2} M samples/s · {err} · ",
-                    snap.stats.complete_passes,
-                    mean_spp(snap),
-                    snap.stats.samples_per_second() / 1e6,
-                )),
-                invalid,
-            ])
-        }
-        None => Line::from(""),
+                Style::new()
+            },
+        );
+        let parts = vec![
+            Span::raw(format!(
+                " {} spp{}",
+                snap.stats.complete_passes,
+                mean_spp(snap)
+            )),
+            Span::raw(format!(
+                " · {:.2} M samples/s",
+                snap.stats.samples_per_second() / 1e6
+            )),
+            Span::raw(err),
+            invalid,
+        ];
+        frame.render_widget(fit_parts(parts, width), first);
+    }
+    let mut parts = Vec::new();
+    let mut left = width;
+    // Each part takes what it needs of the row; later ones get what is left.
+    let push = |parts: &mut Vec<Span<'static>>, left: &mut usize, span: Span<'static>| {
+        *left = left.saturating_sub(span.width());
+        parts.push(span);
     };
-    frame.render_widget(stats, first);
-    let mut spans = Vec::new();
     if let Some(p) = &app.worker_panic {
-        spans.push(Span::styled(
-            format!(" render thread panicked: {p} (r restarts) "),
-            Style::new().white().on_red(),
-        ));
+        let text = clip_words(&format!(" render thread panicked: {p} (r restarts) "), left);
+        push(
+            &mut parts,
+            &mut left,
+            Span::styled(text, Style::new().white().on_red()),
+        );
     }
     match &app.message {
-        Some(Message::Info(m)) => spans.push(Span::styled(format!(" {m} "), Style::new().green())),
-        Some(Message::Error(m)) => spans.push(Span::styled(format!(" {m} "), Style::new().red())),
+        Some(Message::Info(m)) => {
+            let text = clip_words(&format!(" {m} "), left);
+            push(
+                &mut parts,
+                &mut left,
+                Span::styled(text, Style::new().green()),
+            );
+        }
+        Some(Message::Error(m)) => {
+            let text = clip_words(&format!(" {m} "), left);
+            push(
+                &mut parts,
+                &mut left,
+                Span::styled(text, Style::new().red()),
+            );
+        }
         None => {}
     }
-    spans.push(Span::raw(format!(" {}", app.report)).dark_gray());
-    frame.render_widget(Line::from(spans), second);
+    if app.color_hint {
+        if let Some(h) = COLOR_HINTS.iter().find(|h| h.chars().count() + 2 <= left) {
+            let span = Span::styled(format!(" {h} "), Style::new().yellow());
+            push(&mut parts, &mut left, span);
+        }
+    }
+    let notes = app.notes.short();
+    if !notes.is_empty() && notes.chars().count() < left {
+        push(
+            &mut parts,
+            &mut left,
+            Span::raw(format!(" {notes}")).dark_gray(),
+        );
+    }
+    frame.render_widget(Line::from(parts), second);
 }
 
 /// Decade tick labels for a log10 axis from `lo` to `hi` (both integers).
@@ -435,6 +540,7 @@ const HELP: &[(&str, &str)] = &[
     ("c", "toggle truecolor / 256 colours"),
     ("f", "toggle half-blocks / spaces only"),
     ("g", "toggle the error-vs-time chart"),
+    ("i", "details: settings, timings, what the build chose"),
     ("?", "this help (any key closes it)"),
     ("q / Esc / Ctrl-C", "quit"),
 ];
@@ -468,6 +574,106 @@ fn draw_help(frame: &mut Frame, area: Rect) {
     );
 }
 
+/// The details view (`i`): the settings and timings of the current render and the build's
+/// notes in full, each value word-wrapped beside its label.
+fn draw_details(frame: &mut Frame, app: &App, area: Rect) {
+    let s = app.settings();
+    let mut rows: Vec<(&str, String)> = vec![
+        (
+            "scene",
+            format!("{} ({}x{})", app.scene_name, s.width, s.height),
+        ),
+        (
+            "integrator",
+            format!(
+                "{}, {} sampler, seed {}, max depth {}",
+                s.integrator.name(),
+                s.sampler.name(),
+                s.seed,
+                s.max_depth
+                    .map_or("none (roulette)".into(), |d| d.to_string())
+            ),
+        ),
+        (
+            "samples",
+            format!(
+                "target {} spp{}{}",
+                s.spp,
+                if s.adaptive { ", adaptive" } else { "" },
+                s.target_error
+                    .map_or(String::new(), |e| format!(", stop at rel. error {e}"))
+            ),
+        ),
+        (
+            "display",
+            format!("exposure {}, tonemap {}", s.exposure, s.tonemap.name()),
+        ),
+        ("threads", app.threads.to_string()),
+    ];
+    if let Some(snap) = &app.snapshot {
+        let st = &snap.stats;
+        rows.push((
+            "progress",
+            format!(
+                "{} spp{} in {}, {:.2} M samples/s, {:.1} M rays",
+                st.complete_passes,
+                mean_spp(snap),
+                fmt_duration(st.elapsed.as_secs_f64()),
+                st.samples_per_second() / 1e6,
+                st.rays as f64 / 1e6
+            ),
+        ));
+        rows.push((
+            "error",
+            format!(
+                "est. {:.4} (rel {:.3}), invalid samples {}",
+                snap.error.rmse,
+                snap.error.relative(),
+                st.invalid
+            ),
+        ));
+    }
+    rows.push((
+        "scene build",
+        format!("{:.1} ms", app.notes.build_time.as_secs_f64() * 1e3),
+    ));
+    rows.push(("accel", app.notes.accel.clone()));
+    rows.push(("lights", app.notes.light_sampling.clone()));
+    rows.push(("caustics", app.notes.caustics.clone()));
+    let colours = match (app.color_mode, app.form.color) {
+        (super::color::ColorMode::Truecolor, _) => "truecolor".to_string(),
+        (_, super::color::ColorChoice::Auto) => COLOR_HINTS[0].to_string(),
+        _ => "256 colours (c for truecolor)".to_string(),
+    };
+    rows.push(("preview", colours));
+
+    let w = area.width.min(100);
+    let label_w = 12;
+    let value_w = (w as usize).saturating_sub(label_w + 3).max(1);
+    let mut lines = Vec::new();
+    for (label, value) in rows {
+        for (k, text) in wrap_words(&value, value_w).into_iter().enumerate() {
+            let label = if k == 0 { label } else { "" };
+            lines.push(Line::from(vec![
+                Span::styled(format!(" {label:<11}"), Style::new().bold().yellow()),
+                Span::raw(format!(" {text}")),
+            ]));
+        }
+    }
+    let h = (lines.len() as u16 + 2).min(area.height);
+    let popup = Rect::new(
+        area.x + (area.width - w) / 2,
+        area.y + (area.height - h) / 2,
+        w,
+        h,
+    );
+    frame.render_widget(Clear, popup);
+    frame.render_widget(
+        Paragraph::new(lines).block(Block::bordered().title(" details (any key closes) ")),
+        popup,
+    );
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -475,11 +681,27 @@ mod tests {
     use crate::render::RenderStats;
     use crate::settings::SettingsOverrides;
     use crate::tui::color::{ColorChoice, ColorMode};
-    use crate::tui::worker::{Snapshot, WorkerEvent};
+    use crate::tui::worker::{BuildNotes, Snapshot, WorkerEvent};
     use ratatui::backend::TestBackend;
     use ratatui::Terminal;
     use std::sync::Arc;
     use std::time::Duration;
+
+    /// What cornell's build reports (the long texts of issue 37).
+    fn cornell_notes() -> BuildNotes {
+        BuildNotes {
+            accel: "flat scan, 9 objects (auto: the boxes do not separate the objects; camera \
+                    rays would cost 21.7 tests vs 9 flat)"
+                .into(),
+            light_sampling: "1 emitter; 1 sphere light(s) cut by other spheres: only the cap \
+                             on the shading point's side is sampled"
+                .into(),
+            caustics: "light-traced (2689 paths per pass towards 2 mirror/glass sphere(s); 81% \
+                       of a pilot's paths reached the camera)"
+                .into(),
+            build_time: Duration::from_micros(400),
+        }
+    }
 
     /// An app showing a synthetic 64x48 film (a gradient with a bright disc) at 32 of 128 spp
     /// after 2 s: everything the view shows is fixed, nothing depends on the clock.
@@ -505,7 +727,7 @@ mod tests {
             settings: app.settings(),
             scene_render: SettingsOverrides::default(),
             scene_name: "cornell".into(),
-            report: "accel: flat; light sampling: power".into(),
+            notes: cornell_notes(),
             threads: 2,
         });
         let (fw, fh) = (64u32, 48u32);
@@ -613,6 +835,109 @@ mod tests {
         app.show_chart = true;
         app.resize(80, 24);
         insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn main_layout_120x40() {
+        let app = app(120, 40);
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn details_view() {
+        let mut app = app(80, 24);
+        app.on_key(crossterm::event::KeyEvent::from(
+            crossterm::event::KeyCode::Char('i'),
+        ));
+        assert!(app.show_details);
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    #[test]
+    fn details_view_120x40() {
+        let mut app = app(120, 40);
+        app.show_details = true;
+        insta::assert_snapshot!(render(&app).backend());
+    }
+
+    /// The status rows of a screen as text.
+    fn status_rows(t: &Terminal<TestBackend>) -> Vec<String> {
+        let buf = t.backend().buffer();
+        let h = buf.area.height;
+        (h - 2..h)
+            .map(|y| {
+                (0..buf.area.width)
+                    .map(|x| buf[(x, y)].symbol().to_string())
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_colour_hint_shows_until_a_key_is_pressed() {
+        for (w, h, hint) in [(80, 24, COLOR_HINTS[2]), (120, 40, COLOR_HINTS[0])] {
+            let mut app = app(w, h);
+            let rows = status_rows(&render(&app));
+            assert!(rows[1].contains(hint), "{w}: {rows:?}");
+            app.on_key(crossterm::event::KeyEvent::from(
+                crossterm::event::KeyCode::Tab,
+            ));
+            let rows = status_rows(&render(&app));
+            assert!(!rows[1].contains("256 colours"), "{w}: {rows:?}");
+            // Without the hint, the build notes take its place, in short.
+            assert!(rows[1].contains(&app.notes.short()), "{w}: {rows:?}");
+        }
+        // Not when 256 colours were asked for.
+        let mut app = app(80, 24);
+        app.color_hint = false;
+        app.form.color = ColorChoice::Ansi256;
+        assert!(!status_rows(&render(&app))[1].contains("truecolor"));
+    }
+
+    #[test]
+    fn status_rows_are_never_cut_mid_word() {
+        // Every word on the status rows is a whole word of the texts they are made of, at both
+        // widths, with and without the hint and a long message.
+        for (w, h) in [(80, 24), (120, 40), (MIN_WIDTH, MIN_HEIGHT)] {
+            for hint in [true, false] {
+                let mut app = app(w, h);
+                app.color_hint = hint;
+                app.message = Some(Message::Info(
+                    "saved /home/someone/renders/cornell-128spp-20261204-153000.png".into(),
+                ));
+                let mut source = COLOR_HINTS.join(" ");
+                source.push_str(&format!(" {} ", app.notes.short()));
+                source.push_str(" saved /home/someone/renders/cornell-128spp-20261204-153000.png ");
+                source.push_str(
+                    " 32 spp · 0.05 M samples/s · est. error 0.0123 (rel 0.030) · invalid 0",
+                );
+                let words: Vec<&str> = source.split_whitespace().collect();
+                for row in status_rows(&render(&app)) {
+                    for word in row.split_whitespace() {
+                        let whole = word.strip_suffix('…').unwrap_or(word);
+                        assert!(
+                            words.contains(&whole),
+                            "{w}x{h} hint {hint}: '{word}' cut in {row:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn short_notes_keep_the_first_clause_of_each() {
+        assert_eq!(
+            cornell_notes().short(),
+            "flat scan, 9 objects · 1 emitter · caustics light-traced"
+        );
+        let bvh = BuildNotes {
+            accel: "BVH, 1200 objects, 2399 nodes, built in 1.2 ms (auto: ...)".into(),
+            light_sampling: "none (no emitters)".into(),
+            caustics: String::new(),
+            build_time: Duration::ZERO,
+        };
+        assert_eq!(bvh.short(), "BVH, 1200 objects · none");
     }
 
     #[test]

@@ -88,7 +88,7 @@ pub enum WorkerEvent {
         settings: RenderSettings,
         scene_render: SettingsOverrides,
         scene_name: String,
-        report: String,
+        notes: BuildNotes,
         threads: usize,
     },
     Progress(Arc<Snapshot>),
@@ -99,6 +99,46 @@ pub enum WorkerEvent {
     },
     /// A render thread panicked; the render is dropped and the worker waits for a new request.
     Panicked(String),
+}
+
+/// What the scene build and the renderer chose, in full (the details view) and as one short
+/// phrase (the status line).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BuildNotes {
+    pub accel: String,
+    pub light_sampling: String,
+    pub caustics: String,
+    pub build_time: std::time::Duration,
+}
+
+impl BuildNotes {
+    /// Each note cut before its first explanation (a parenthesis, a semicolon or a second
+    /// comma): `flat scan, 9 objects · 1 emitter · caustics light-traced`.
+    pub fn short(&self) -> String {
+        fn head(s: &str, commas: usize) -> &str {
+            let mut end = s.len();
+            if let Some(i) = s.find(" (") {
+                end = end.min(i);
+            }
+            if let Some(i) = s.find(';') {
+                end = end.min(i);
+            }
+            if let Some((i, _)) = s.match_indices(',').nth(commas) {
+                end = end.min(i);
+            }
+            s[..end].trim()
+        }
+        let parts = [
+            head(&self.accel, 1).to_string(),
+            head(&self.light_sampling, 0).to_string(),
+            match head(&self.caustics, 0) {
+                "" => String::new(),
+                c => format!("caustics {c}"),
+            },
+        ];
+        let parts: Vec<String> = parts.into_iter().filter(|p| !p.is_empty()).collect();
+        parts.join(" · ")
+    }
 }
 
 /// The UI's end of the worker.
@@ -345,7 +385,12 @@ impl Worker {
             settings,
             scene_render: scene.render.clone(),
             scene_name: scene.name.clone(),
-            report: scene.report.to_string(),
+            notes: BuildNotes {
+                accel: scene.report.accel.clone(),
+                light_sampling: scene.report.light_sampling.clone(),
+                caustics: job.renderer.caustics_note().to_string(),
+                build_time: scene.report.build_time,
+            },
             threads: job.renderer.threads(),
         });
         self.update_status();
