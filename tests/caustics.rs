@@ -240,6 +240,14 @@ fn the_tracer_is_only_built_where_it_applies() {
     assert!(off.unwrap_err().contains("caustics = \"path\""));
     let direct = with(layer(Caustics::LightDirect, 1, 0));
     assert!(direct.is_ok());
+    // Smooth meshes: the tracer stays, without joins, and says why.
+    let knot = Arc::new(scene::load("torus-knot").expect("built-in"));
+    let s = common::settings_for(&knot, &base);
+    let note = CausticTracer::new(&knot, &s).expect("a tracer").describe();
+    assert!(
+        note.contains("no joins") && note.contains("smooth meshes"),
+        "{note}"
+    );
     let plain = Arc::new(scene::load("spheres-field").expect("built-in"));
     let s = common::settings_for(&plain, &base);
     assert!(CausticTracer::new(&plain, &s).is_err());

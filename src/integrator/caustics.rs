@@ -471,6 +471,8 @@ pub struct CausticTracer {
     pilot_rate: f64,
     /// Whether camera vertices are joined to the light paths' ends (`caustics = "light"`).
     pub connect: bool,
+    /// Why `caustics = "light"` was asked for but the joins are off, for the summary.
+    no_joins_why: Option<&'static str>,
     /// Connections worth less than this (radiance) play roulette for their shadow ray.
     pub connect_threshold: f64,
 }
@@ -565,6 +567,11 @@ impl CausticTracer {
             // Joins would need y's shading normal in the stored vertex: scenes with vertex
             // normals keep the light paths' direct splats only.
             connect: settings.caustics == Caustics::Light && !scene.has_shading_normals(),
+            no_joins_why: (settings.caustics == Caustics::Light && scene.has_shading_normals())
+                .then_some(
+                    "the scene has smooth meshes, whose shading normals the light-path ends do \
+                     not keep",
+                ),
             connect_threshold: 0.0,
         };
         // A fixed-seed pilot, before any sample is taken: the choice does not depend on the
@@ -613,6 +620,8 @@ impl CausticTracer {
                  probability min({}, worth / {:.3}){windows}",
                 JOIN_ATTEMPT, self.connect_threshold
             )
+        } else if let Some(why) = self.no_joins_why {
+            format!("seen directly only: no joins to camera vertices, as {why}")
         } else {
             "seen directly only (caustics = \"light-direct\")".to_string()
         };
@@ -1400,6 +1409,7 @@ mod tests {
             pixel_norm: 1.0,
             pilot_rate: 0.0,
             connect: true,
+            no_joins_why: None,
             connect_threshold: 0.0,
         }
     }
