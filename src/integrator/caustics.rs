@@ -45,17 +45,8 @@ use crate::settings::{Caustics, IntegratorKind, RenderSettings};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-/// Light paths per pixel and pass. Measured on `cornell` and `cornell-small-light` at 128 spp
-/// (README), before the joins: from 1 down to 0.1 the film's estimated error did not move
-/// (0.0448-0.0449 and 0.1913) while the time fell 9.2 -> 6.7 s and 7.7 -> 6.2 s; at 0.03 the
-/// caustics started to show (0.0451). With the joins, by time (64 spp, CPU seconds, RMSE against
-/// the reference over seeds 1-3): 0.2 / 0.05 / 0.035 / 0.025 against 0.1 take 1.107 / 0.927 /
-/// 0.893 / 0.870x the time at 0.993 / 1.011 / 1.019 / 1.032x the RMSE, MSE x time 1.09 / 0.95 /
-/// 0.93 / 0.93x; on cornell-small-light 0.05 takes 0.926x the time at the same estimated error.
-/// 0.035 against 0.05, measured again a session later (CPU seconds, RMSE over seeds 1-6, the
-/// configurations alternated): cornell 64 spp 0.957x the time at 1.028x the MSE (MSE x time
-/// 0.984x), cornell-small-light 128 spp 0.971x the time at the same estimated error (0.972x):
-/// the optimum is flat from 0.025 to 0.05, and 0.035 sits in it with less time per path.
+/// Light paths per pixel and pass. Error per second is flat from 0.025 to 0.05; 0.035 sits in
+/// it with less time per path (benches/HISTORY.md#light-paths-per-pixel).
 pub const LIGHT_PATHS_PER_PIXEL: f64 = 0.035;
 
 /// The largest f64 below 1.
@@ -92,14 +83,9 @@ const PILOT_CAMERA_PATHS: u64 = 4096;
 
 /// A connection to a caustic vertex whose unoccluded value is below this share of the image's
 /// mean luminance traces its shadow ray with probability value / threshold (and is divided by
-/// it). Measured on cornell at 64 spp: without roulette 8.15 rays per path, RMSE 0.05186; with
-/// thresholds of 0.03, 0.15 and 0.6 x the mean, 6.71, 5.84 and 5.59 rays per path, RMSE 0.05186,
-/// 0.05188 and 0.05199 (the camera paths alone: 5.50 rays, 0.0637). Rays are not what the joins
-/// cost, though: the attempts are (picking an end, its bound), and a higher threshold ends more
-/// of them at the first bound. By time, cornell 64 spp, CPU seconds and RMSE (seeds 1-2) against
-/// 0.25: 0.5 and 1.0 save 4.6% and 7.5% of the time at +0.5% and +1.4% RMSE, 2 and 4 gain
-/// little more time for +3.3% and +7.1%: MSE x time 0.95x at 1.0, the best; on
-/// cornell-small-light 1.0 saves 3.7% at the same estimated error.
+/// it). What the joins cost is the attempts (picking an end, its bound), and a higher threshold
+/// ends more of them at the first bound; 1.0 had the best error x time
+/// (benches/HISTORY.md#join-roulette-threshold).
 const CONNECT_ROULETTE_SHARE: f64 = 1.0;
 
 /// The chance a camera vertex attempts its join at all; an attempt that goes ahead plays the
@@ -107,14 +93,8 @@ const CONNECT_ROULETTE_SHARE: f64 = 1.0;
 /// A join worth w is then traced with probability min(JOIN_ATTEMPT, w / threshold): for the
 /// joins worth less than JOIN_ATTEMPT x the threshold, nearly all of them, the same chance and
 /// weight as without it, while four attempts in five now end before an end is picked, loaded
-/// and bounded; only the few worth more are traced less often (and weigh more). Measured against
-/// 1 (every vertex attempts), CPU seconds and error over seeds 1-6, configurations alternated:
-/// cornell 64 spp, 0.5 / 0.3 / 0.2 / 0.1: 0.975 / 0.938 / 0.920 / 0.912x the time at 1.010 /
-/// 1.025 / 1.043 / 1.111x the MSE against the reference (MSE x time 0.984 / 0.961 / 0.960 /
-/// 1.013x; 0.974x for 0.2 in a second run); cornell-small-light 128 spp, seeds 1-4: 0.3 / 0.2
-/// take 0.942 / 0.923x the time at the same estimated error (1.003x). With 0.2, a threshold of
-/// 0.5 or 0.25 x the mean instead of 1 gave MSE x time 0.966x and 0.963x: as flat, so the
-/// threshold stays.
+/// and bounded; only the few worth more are traced less often (and weigh more). Set by error x
+/// time on cornell and cornell-small-light (benches/HISTORY.md#join-attempt).
 pub const JOIN_ATTEMPT: f64 = 0.2;
 
 /// Where on an emitter the light tracer starts paths (it covers emission from there, outwards).

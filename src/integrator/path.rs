@@ -20,11 +20,7 @@ use crate::scene::{Primitive, Scene};
 
 /// The camera sample and the first `SEQUENCE_DEPTH` vertices draw their numbers from the Sobol
 /// sequence; deeper vertices hash theirs ([`Sampler::leave_sequence`]): there the sequence's
-/// stratification bought about what it cost. Cornell 256 spp, seeds 1-6 alternated, against the
-/// sequence at every depth: 0.950x the CPU time at 1.040x the MSE against the reference (MSE x
-/// time 0.988x); cornell-small-light 128 spp: 0.955x at 1.042x the estimated MSE (0.996x).
-/// The sequence for one vertex instead: MSE x time 1.026x; for three: 0.971x, but 0.951x the
-/// time where two take 0.941x (a trial build, 4 seeds).
+/// stratification bought about what it cost (benches/HISTORY.md#sequence-depth).
 pub(crate) const SEQUENCE_DEPTH: u32 = 2;
 
 /// With `caustics`, the caustics it light-traces and splats are left to it: emission reached from

@@ -1,5 +1,5 @@
-//! Triangle meshes for `[[mesh]]`: Wavefront OBJ files read with `tobj`, or the built-in torus
-//! knot generator, placed by a similarity transform.
+//! Triangle meshes for `[[mesh]]`: Wavefront OBJ files read by `scene::obj`, or the built-in
+//! torus knot generator, placed by a similarity transform.
 //!
 //! ```toml
 //! [[mesh]]
