@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{load_str, render, z_for_two_sided};
+use common::{assert_furnace, load_str, render};
 use ptui::settings::{IntegratorKind, SettingsOverrides};
 
 /// Russian roulette makes each pixel's samples skewed (most paths stop at the same short length,
@@ -37,38 +37,13 @@ fn furnace(albedo: f64, emission: f64, integrator: IntegratorKind, spp: u32) {
             ..Default::default()
         },
     );
-    let film = r.film();
-    let expected = emission / (1.0 - albedo);
     assert_eq!(r.stats().invalid, 0);
-    // Whole image: the pixel means are independent, so the variance of their average is the sum
-    // of their variances over P^2.
-    let p = film.pixels();
-    let (mut sum, mut var) = (0.0, 0.0);
-    // Per pixel, with a Bonferroni correction over the 3P tests at a 1e-4 family-wise level.
-    let z_pixel = z_for_two_sided(1e-4 / (3 * p) as f64);
-    for i in 0..p {
-        let m = film.mean(i);
-        let v = film.variance_of_mean(i);
-        for c in 0..3 {
-            let z = (m[c] - expected) / v[c].sqrt();
-            assert!(
-                z.abs() < z_pixel,
-                "pixel {i} channel {c}: {} vs {expected} (z = {z:.2}, limit {z_pixel:.2})",
-                m[c]
-            );
-        }
-        sum += m.x;
-        var += v.x;
-    }
-    let mean = sum / p as f64;
-    let se = var.sqrt() / p as f64;
-    let z = (mean - expected) / se;
-    assert!(
-        z.abs() < z_for_two_sided(1e-4),
-        "albedo {albedo} {integrator:?}: image mean {mean:.5} vs {expected} (se {se:.5}, z {z:.2})"
+    let expected = emission / (1.0 - albedo);
+    assert_furnace(
+        r.film(),
+        expected,
+        &format!("albedo {albedo} {integrator:?}"),
     );
-    // And the estimate must be tight enough for the test to mean something.
-    assert!(se < 0.01 * expected, "se {se} too large to test anything");
 }
 
 #[test]

@@ -1,6 +1,8 @@
 //! Triangles, quads and meshes in scene files: OBJ loading with clear errors, transforms, and the
 //! flat scan and the BVH giving identical images.
 
+mod common;
+
 use ptui::accel::AccelChoice;
 use ptui::render::Renderer;
 use ptui::scene::{self, BuildOptions, SceneError};
@@ -274,21 +276,17 @@ fn light_and_wall(camera_z: f64, look_z: f64, two_sided: bool) -> String {
         if two_sided { "two_sided = true\n" } else { "" }
     )
 }
+
 fn render_str(src: &str, integrator: IntegratorKind, size: u32, spp: u32) -> Vec<f32> {
-    let scene = Arc::new(scene::load_str(src, "emitter.toml").expect("scene"));
-    let settings = RenderSettings::merged(&[
-        &scene.render,
-        &SettingsOverrides {
-            width: Some(size),
-            height: Some(size),
-            spp: Some(spp),
-            integrator: Some(integrator),
-            seed: Some(3),
-            ..Default::default()
-        },
-    ]);
-    let mut r = Renderer::new(scene, settings).expect("renderer");
-    r.render(&AtomicBool::new(false), |_| true);
+    let overrides = SettingsOverrides {
+        width: Some(size),
+        height: Some(size),
+        spp: Some(spp),
+        integrator: Some(integrator),
+        seed: Some(3),
+        ..Default::default()
+    };
+    let r = common::render(common::load_str(src), &overrides);
     assert_eq!(r.stats().invalid, 0);
     r.film().mean_rgb_f32()
 }

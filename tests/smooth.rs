@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{load_str, render, z_for_two_sided};
+use common::{assert_furnace, load_str, render, z_for_two_sided};
 use ptui::settings::{IntegratorKind, SettingsOverrides};
 use std::f64::consts::PI;
 use std::fmt::Write;
@@ -84,31 +84,8 @@ fn furnace(albedo: f64, emission: f64, integrator: IntegratorKind) {
         },
     );
     assert_eq!(r.stats().invalid, 0);
-    let film = r.film();
     let expected = emission / (1.0 - albedo);
-    let p = film.pixels();
-    let z_pixel = z_for_two_sided(1e-4 / (3 * p) as f64);
-    let (mut sum, mut var) = (0.0, 0.0);
-    for i in 0..p {
-        let (m, v) = (film.mean(i), film.variance_of_mean(i));
-        for c in 0..3 {
-            let z = (m[c] - expected) / v[c].sqrt();
-            assert!(
-                z.abs() < z_pixel,
-                "pixel {i}: {} vs {expected} (z {z:.2})",
-                m[c]
-            );
-        }
-        sum += m.x;
-        var += v.x;
-    }
-    let (mean, se) = (sum / p as f64, var.sqrt() / p as f64);
-    let z = (mean - expected) / se;
-    assert!(
-        z.abs() < z_for_two_sided(1e-4),
-        "{integrator:?}: image mean {mean:.5} vs {expected} (se {se:.5}, z {z:.2})"
-    );
-    assert!(se < 0.01 * expected, "se {se} too large to test anything");
+    assert_furnace(r.film(), expected, &format!("{integrator:?}"));
 }
 
 #[test]

@@ -148,3 +148,38 @@ pub fn erfc(x: f64) -> f64 {
 pub fn mean_image(film: &Film) -> Vec<f32> {
     film.mean_rgb_f32()
 }
+
+/// A furnace's check: every pixel of `film` reads `expected` (per-pixel z-tests, Bonferroni over
+/// the 3P tests at a 1e-4 family-wise level), so does the image mean (the pixel means are
+/// independent, so the variance of their average is the sum of their variances over P^2), and
+/// the image mean's standard error is under 1% of `expected`, tight enough to mean something.
+pub fn assert_furnace(film: &Film, expected: f64, what: &str) {
+    let p = film.pixels();
+    let (mut sum, mut var) = (0.0, 0.0);
+    let z_pixel = z_for_two_sided(1e-4 / (3 * p) as f64);
+    for i in 0..p {
+        let m = film.mean(i);
+        let v = film.variance_of_mean(i);
+        for c in 0..3 {
+            let z = (m[c] - expected) / v[c].sqrt();
+            assert!(
+                z.abs() < z_pixel,
+                "{what}: pixel {i} channel {c}: {} vs {expected} (z = {z:.2}, limit {z_pixel:.2})",
+                m[c]
+            );
+        }
+        sum += m.x;
+        var += v.x;
+    }
+    let mean = sum / p as f64;
+    let se = var.sqrt() / p as f64;
+    let z = (mean - expected) / se;
+    assert!(
+        z.abs() < z_for_two_sided(1e-4),
+        "{what}: image mean {mean:.5} vs {expected} (se {se:.5}, z {z:.2})"
+    );
+    assert!(
+        se < 0.01 * expected,
+        "{what}: se {se} too large to test anything"
+    );
+}
