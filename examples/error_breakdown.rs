@@ -5,7 +5,7 @@
 //! cargo run --release --example error_breakdown -- render.exr ../shared/refs/cornell.exr heat.png
 //! ```
 
-use ptui::reference;
+use ptui::analysis::reference;
 use std::path::Path;
 
 fn main() -> anyhow::Result<()> {

@@ -8,10 +8,10 @@
 //! cargo run --release --example probe_limits -- /tmp/p/translate-*.toml
 //! ```
 
-use ptui::check::{resolve, Options};
-use ptui::film::Film;
+use ptui::analysis::check::{check_desc, resolve, Options};
+use ptui::render::film::Film;
 use ptui::render::Renderer;
-use ptui::scene::{load::parse, load_str};
+use ptui::scene::load_str;
 use ptui::settings::{RenderSettings, SettingsOverrides};
 use std::sync::{atomic::AtomicBool, Arc};
 
@@ -31,8 +31,7 @@ fn main() {
     );
     for path in std::env::args().skip(1) {
         let source = resolve(&path, None).expect("scene");
-        let desc = parse(&source.text, &source.name).expect("parses");
-        let check = desc.check.unwrap_or_default();
+        let check = check_desc(&source).expect("parses");
         let reference = resolve(check.same_as.as_deref().unwrap_or("cornell"), None).expect("ref");
         let layer = SettingsOverrides {
             width: check.width,

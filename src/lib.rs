@@ -8,26 +8,18 @@
 #![forbid(unsafe_op_in_unsafe_fn)]
 
 pub mod accel;
-pub mod adaptive;
+pub mod analysis;
 pub mod camera;
-pub mod check;
 pub mod cli;
-pub mod convergence;
 pub mod cpu;
-pub mod error_map;
-pub mod film;
-pub mod film_file;
 pub mod geometry;
 pub mod integrator;
+pub mod io;
 pub mod light;
 pub mod material;
 pub mod math;
-pub mod output;
-pub mod plot;
-pub mod reference;
 pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod settings;
-pub mod shard;
 pub mod tui;

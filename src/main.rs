@@ -57,11 +57,11 @@ fn tui_film(
     let Some(path) = arg.map(std::path::Path::new) else {
         return Ok(None);
     };
-    if !ptui::film_file::is_film_path(path) {
+    if !ptui::io::film_file::is_film_path(path) {
         return Ok(None);
     }
-    let h = ptui::film_file::open(path)?.header;
-    let hash = ptui::film_file::scene_hash(&h.scene).map_err(|e| anyhow::anyhow!(e))?;
+    let h = ptui::io::film_file::open(path)?.header;
+    let hash = ptui::io::film_file::scene_hash(&h.scene).map_err(|e| anyhow::anyhow!(e))?;
     if hash != h.scene_hash {
         anyhow::bail!(
             "{}: its scene {} has changed since (scene_hash {} there, {hash} now)",

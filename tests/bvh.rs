@@ -4,10 +4,10 @@
 
 use proptest::prelude::*;
 use ptui::accel::{bench, flat, flat::FlatScan, Bvh};
+use ptui::geometry::{Primitive, Shape};
 use ptui::geometry::{Sphere, Triangle};
 use ptui::math::{DVec3, Ray};
 use ptui::sampling::{warp, Rng};
-use ptui::scene::{Primitive, Shape};
 
 /// Random primitives plus the stiff cases: exact duplicates (equal distances, where the lower
 /// index must win), a huge smallpt-style wall sphere, and a degenerate triangle.

@@ -4,7 +4,7 @@
 
 mod common;
 
-use ptui::check::stats;
+use ptui::analysis::stats;
 use ptui::integrator::caustics::CausticTracer;
 use ptui::sampling::SamplerKind;
 use ptui::scene;
@@ -70,7 +70,7 @@ fn layer(caustics: Caustics, spp: u32, seed: u64) -> SettingsOverrides {
 const BLOCK: u32 = 10;
 
 /// Sum of means and of variances of the mean over each BLOCK x BLOCK block, per channel.
-fn blocks(film: &ptui::film::Film) -> Vec<([f64; 3], [f64; 3])> {
+fn blocks(film: &ptui::render::film::Film) -> Vec<([f64; 3], [f64; 3])> {
     let (w, h) = (film.width, film.height);
     let mut out = Vec::new();
     for by in 0..h / BLOCK {
@@ -258,7 +258,7 @@ fn the_tracer_is_only_built_where_it_applies() {
 /// leaves caustics to the camera paths for its z-tests, so this is where the tracer meets them.
 #[test]
 fn extreme_scenes_stay_finite_with_light_traced_caustics() {
-    for (name, text) in ptui::check::extreme::EXTREME {
+    for (name, text) in ptui::analysis::check::extreme::EXTREME {
         let scene = Arc::new(scene::load_str(text, name).unwrap_or_else(|e| panic!("{e}")));
         let r = common::render(
             scene,
@@ -402,7 +402,7 @@ fn through_glass(scene: &scene::Scene, w: u32, h: u32) -> Vec<bool> {
 
 /// Mean over the masked pixels, per channel, and the variance of that mean (pixels are
 /// independent, so their variances of the mean add).
-fn region(film: &ptui::film::Film, mask: &[bool]) -> ([f64; 3], [f64; 3]) {
+fn region(film: &ptui::render::film::Film, mask: &[bool]) -> ([f64; 3], [f64; 3]) {
     let n = mask.iter().filter(|&&m| m).count() as f64;
     let (mut m, mut v) = ([0.0; 3], [0.0; 3]);
     for (i, _) in mask.iter().enumerate().filter(|(_, &m)| m) {

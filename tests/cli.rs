@@ -201,8 +201,8 @@ fn failing_writer_loses_nothing() {
     let dir = scratch("writer");
     let out = dir.join("img.png");
     std::fs::write(&out, b"old").unwrap();
-    let err = ptui::output::write_atomic_with(&out, &[7u8; 1000], |f, data| {
-        ptui::output::write_all_to(
+    let err = ptui::io::output::write_atomic_with(&out, &[7u8; 1000], |f, data| {
+        ptui::io::output::write_all_to(
             &mut FullDisk {
                 inner: f,
                 room: 100,
@@ -228,7 +228,7 @@ fn check_prints_a_table_and_fails_on_a_broken_expectation() {
 
     let dir = scratch("check");
     let wrong = dir.join("wrong.toml");
-    let text = ptui::check::extreme::get("inside-light")
+    let text = ptui::analysis::check::extreme::get("inside-light")
         .unwrap()
         .replace("mean = 0.5", "mean = 0.55");
     std::fs::write(&wrong, text).unwrap();

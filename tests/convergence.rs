@@ -5,10 +5,10 @@
 //! from `stats.txt`). Tests here run one at a time (a lock): the rate test measures wall time,
 //! which other tests running beside it on the same cores would distort.
 
+use ptui::analysis::convergence::{self, Metric, Schedule, CSV_HEADER};
+use ptui::analysis::error_map;
+use ptui::analysis::reference::{self, LinearImage};
 use ptui::cli::converge::{converge, ConvergeArgs};
-use ptui::convergence::{self, Metric, Schedule, CSV_HEADER};
-use ptui::error_map;
-use ptui::reference::{self, LinearImage};
 use ptui::render::Renderer;
 use ptui::scene;
 use ptui::settings::{IntegratorKind, RenderSettings};
@@ -236,7 +236,7 @@ fn converge_writes_the_documented_csv_and_a_valid_png() {
     let png = image::open(dir.join("convergence.png")).expect("a valid PNG");
     assert_eq!(
         (png.width(), png.height()),
-        (ptui::plot::WIDTH, ptui::plot::HEIGHT)
+        (ptui::analysis::plot::WIDTH, ptui::analysis::plot::HEIGHT)
     );
     // The two integrators' line colours are on it (blue and vermilion), so lines were drawn.
     let rgb = png.into_rgb8();

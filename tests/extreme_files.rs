@@ -38,7 +38,7 @@ fn embedded_list_matches_the_directory() {
         })
         .collect();
     on_disk.sort();
-    let mut embedded: Vec<(String, String)> = ptui::check::extreme::EXTREME
+    let mut embedded: Vec<(String, String)> = ptui::analysis::check::extreme::EXTREME
         .iter()
         .map(|(n, s)| (n.to_string(), s.to_string()))
         .collect();
@@ -48,7 +48,7 @@ fn embedded_list_matches_the_directory() {
 
 #[test]
 fn every_extreme_scene_loads_and_states_an_expectation() {
-    for (name, src) in ptui::check::extreme::EXTREME {
+    for (name, src) in ptui::analysis::check::extreme::EXTREME {
         let desc = ptui::scene::load::parse(src, name).unwrap_or_else(|e| panic!("{e}"));
         assert!(desc.check.is_some(), "{name} has no [check] table");
         ptui::scene::load_str(src, name).unwrap_or_else(|e| panic!("{e}"));

@@ -1,6 +1,6 @@
 //! One test per scene of `scenes/extreme/`: each is rendered as its `[check]` table says (small
 //! image, fixed seed) and must meet its expectation with zero invalid samples. These are exactly
-//! the checks `ptui check` runs; the statistics are explained in `ptui::check::stats`.
+//! the checks `ptui check` runs; the statistics are explained in `ptui::analysis::stats`.
 //!
 //! - invariance (`same_as`): translated by 1e4 and 1e6, scaled by 1e-3 and 1e3, walls of radius
 //!   1e6 and 1e8, index-matched glass, and the two smallest lights, against independent renders;
@@ -9,7 +9,7 @@
 //! - finite: grazing angles, total internal reflection, the critical angle, overlapping and
 //!   nested spheres, a light inside glass, silhouettes.
 
-use ptui::check::{run_extreme, Outcome};
+use ptui::analysis::check::{run_extreme, Outcome};
 
 fn check(name: &str) -> Outcome {
     let o = run_extreme(name).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -43,7 +43,7 @@ macro_rules! extreme_tests {
         #[test]
         fn every_extreme_scene_has_a_test() {
             let mut tested = vec![$($name),*];
-            let mut all = ptui::check::extreme::names();
+            let mut all = ptui::analysis::check::extreme::names();
             tested.sort();
             all.sort();
             assert_eq!(tested, all);

@@ -14,7 +14,7 @@ use std::sync::Arc;
 fn sources() -> Vec<&'static str> {
     builtin::BUILTIN
         .iter()
-        .chain(ptui::check::extreme::EXTREME)
+        .chain(ptui::analysis::check::extreme::EXTREME)
         .map(|(_, s)| *s)
         .collect()
 }

@@ -2,7 +2,7 @@
 //! re-walled Cornell boxes (tests/extreme_scenes.rs) rejects small but real changes of the image
 //! at the same size, sample count and significance level.
 
-use ptui::check::{self, Options, Source};
+use ptui::analysis::check::{self, Options, Source};
 use std::borrow::Cow;
 
 /// Check a variant of an extreme scene's text, edited by `edit`.

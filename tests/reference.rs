@@ -4,7 +4,7 @@
 
 mod common;
 
-use ptui::reference;
+use ptui::analysis::reference;
 use ptui::render::Renderer;
 use ptui::sampling::SamplerKind;
 use ptui::scene;

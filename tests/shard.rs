@@ -1,15 +1,15 @@
 //! Shards, film files, merge and resume (issue 36): the merge of N shards is the single render
 //! (the mean within 1e-12 relative per pixel and channel, sample counts exact; not bit for bit,
-//! see `ptui::shard`), in any order; mismatched, overlapping and corrupt parts are refused; a
+//! see `ptui::io::shard`), in any order; mismatched, overlapping and corrupt parts are refused; a
 //! resumed film equals a render never stopped, bit for bit.
 
-use ptui::adaptive::SampleMap;
-use ptui::film::Film;
-use ptui::film_file::{self, FilmHeader, FilmStats};
+use ptui::io::film_file::{self, FilmHeader, FilmStats};
+use ptui::io::shard::{self, MergeError, Shard};
+use ptui::render::adaptive::SampleMap;
+use ptui::render::film::Film;
 use ptui::render::Renderer;
 use ptui::scene;
 use ptui::settings::{Caustics, RenderSettings};
-use ptui::shard::{self, MergeError, Shard};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;

@@ -205,7 +205,7 @@ fn a_neutral_grey_ramp_maps_to_neutral_cells_only() {
     }
     let snap = Snapshot {
         job: 1,
-        image: Arc::new(ptui::film::MeanImage::from_rgb(w, h, &rgb)),
+        image: Arc::new(ptui::render::film::MeanImage::from_rgb(w, h, &rgb)),
         stats: Default::default(),
         error: Default::default(),
         target_spp: 1,

@@ -4,10 +4,10 @@
 //! Shared by `ptui bench accel`, `cargo bench --bench accel` and the tests.
 
 use super::{flat::FlatScan, Bvh};
+use crate::geometry::{Primitive, Shape};
 use crate::geometry::{Sphere, Triangle};
 use crate::math::{DVec3, Ray};
 use crate::sampling::{warp, Rng};
-use crate::scene::{Primitive, Shape};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 

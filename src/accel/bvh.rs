@@ -9,8 +9,8 @@
 
 use crate::geometry::triangle::gamma;
 use crate::geometry::{Aabb, Hit};
+use crate::geometry::{Primitive, Shape};
 use crate::math::{DVec3, Ray};
-use crate::scene::{Primitive, Shape};
 use std::time::{Duration, Instant};
 
 /// SAH buckets per split (pbrt uses 12; more buy little).

@@ -3,8 +3,8 @@
 
 use super::lanes::{RayBatch, SphereLanes};
 use crate::geometry::Hit;
+use crate::geometry::Primitive;
 use crate::math::Ray;
-use crate::scene::Primitive;
 
 #[inline]
 pub fn intersect(prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<Hit> {

@@ -4,8 +4,8 @@
 //! Eight lanes beat four even in AVX2 (benches/HISTORY.md#sphere-lanes). Same arithmetic, in
 //! the same order, as [`Sphere::intersect`], so the roots are bit-identical to the scalar test.
 
+use crate::geometry::Primitive;
 use crate::math::{DVec3, Ray};
-use crate::scene::Primitive;
 
 const LANES: usize = 8;
 
@@ -389,10 +389,10 @@ fn has_avx2() -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Shape;
     use crate::geometry::Sphere;
     use crate::math::DVec3;
     use crate::sampling::{warp, Rng};
-    use crate::scene::Shape;
 
     /// The lanes give exactly the scalar test's answer: same sphere, same bits.
     #[test]

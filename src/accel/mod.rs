@@ -19,8 +19,8 @@ pub mod lanes;
 
 use crate::camera::Camera;
 use crate::geometry::Hit;
+use crate::geometry::Primitive;
 use crate::math::Ray;
-use crate::scene::Primitive;
 use serde::Deserialize;
 
 pub use bvh::Bvh;

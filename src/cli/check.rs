@@ -3,7 +3,7 @@
 //! arguments it runs every extreme scene (embedded from `scenes/extreme/`). Exits with an error
 //! if any check fails.
 
-use crate::check::{self, extreme, Options, Outcome};
+use crate::analysis::check::{self, extreme, Options, Outcome};
 use clap::Args;
 
 #[derive(Args, Debug)]

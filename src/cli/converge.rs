@@ -5,10 +5,10 @@
 //! (stdout and DIR/summary.txt).
 
 use super::{parse_positive, parse_size};
-use crate::convergence::{self, Metric, Series};
-use crate::output;
-use crate::plot::{self, PlotSpec};
-use crate::reference;
+use crate::analysis::convergence::{self, Metric, Series};
+use crate::analysis::plot::{self, PlotSpec};
+use crate::analysis::reference;
+use crate::io::output;
 use crate::render::build_pool;
 use crate::sampling::SamplerKind;
 use crate::scene::{self, builtin};

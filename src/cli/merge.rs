@@ -1,8 +1,8 @@
 //! `ptui merge PART... -o OUT`: shards of one render into its image (.png, .exr) or film.
 
-use crate::film_file;
-use crate::output;
-use crate::shard;
+use crate::io::film_file;
+use crate::io::output;
+use crate::io::shard;
 use clap::Args;
 use std::path::PathBuf;
 

@@ -7,8 +7,8 @@ pub mod merge;
 pub mod render;
 pub mod tui;
 
-use crate::integrator::painterly::params::{parse_unit, MAX_PAINT_DEPTH, MAX_STROKE};
 use crate::sampling::SamplerKind;
+use crate::settings::painterly::{parse_unit, MAX_PAINT_DEPTH, MAX_STROKE};
 use crate::settings::{Hemisphere, IntegratorKind, PainterlyOverrides, SettingsOverrides, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -109,7 +109,7 @@ pub struct RenderArgs {
     /// Render shard I of N (0-based): passes I*spp/N .. (I+1)*spp/N of the render, into a
     /// film (-o part.film) for `ptui merge`.
     #[arg(long, value_name = "I/N", conflicts_with_all = ["shard_from_env", "resume"])]
-    pub shard: Option<crate::shard::Shard>,
+    pub shard: Option<crate::io::shard::Shard>,
     /// Take the shard from the scheduler: SLURM_ARRAY_TASK_ID (of SLURM_ARRAY_TASK_COUNT),
     /// JOB_COMPLETION_INDEX (Kubernetes) or AWS_BATCH_JOB_ARRAY_INDEX, with --shards N.
     #[arg(long, conflicts_with = "resume")]

@@ -1,14 +1,14 @@
 //! `ptui render`: headless progressive render with a progress bar and a summary.
 
 use super::RenderArgs;
-use crate::adaptive::{SampleMap, PILOT_PASSES};
-use crate::error_map;
-use crate::film_file::{self, header_of as film_header, FilmHeader};
-use crate::output;
+use crate::analysis::error_map;
+use crate::io::film_file::{self, header_of as film_header, FilmHeader};
+use crate::io::output;
+use crate::io::shard::Shard;
+use crate::render::adaptive::{SampleMap, PILOT_PASSES};
 use crate::render::Renderer;
 use crate::scene::{self, builtin};
 use crate::settings::{IntegratorKind, RenderSettings};
-use crate::shard::Shard;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};

@@ -6,11 +6,13 @@
 //! one at 1) instead of relying on a fixed epsilon that is too large for tiny scenes and too small
 //! for huge ones.
 
+pub mod primitive;
 pub mod sphere;
 pub mod torus_knot;
 pub mod triangle;
 
 use crate::math::DVec3;
+pub use primitive::{Primitive, Shape};
 pub use sphere::Sphere;
 pub use triangle::Triangle;
 

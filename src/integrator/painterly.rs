@@ -26,11 +26,9 @@
 //! end the path with what it has gathered, so they never reach the film.
 
 pub mod bounce;
-pub mod params;
 pub mod stream;
 
 use self::bounce::painterly_direction;
-use self::params::PainterlyParams;
 use self::stream::PaintStream;
 use super::{path, russian_roulette};
 use crate::geometry::{spawn_origin, Normals};
@@ -38,6 +36,7 @@ use crate::material::{fresnel, BsdfSample, Material, MaterialKind};
 use crate::math::{DVec3, Ray};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::settings::painterly::PainterlyParams;
 
 #[inline(always)]
 pub fn radiance(

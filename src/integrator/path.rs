@@ -10,13 +10,14 @@
 use super::caustics::{connection_ratio, CausticPass, JOIN_ATTEMPT};
 use super::{next_ray, sample_bsdf};
 use crate::accel::lanes::RayBatch;
+use crate::geometry::Primitive;
 use crate::geometry::{spawn_origin, Hit, Normals};
 use crate::light::LightSample;
 use crate::material::Material;
 use crate::math::{max_component, DVec3, Ray};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
-use crate::scene::{Primitive, Scene};
+use crate::scene::Scene;
 
 /// The camera sample and the first `SEQUENCE_DEPTH` vertices draw their numbers from the Sobol
 /// sequence; deeper vertices hash theirs ([`Sampler::leave_sequence`]): there the sequence's

@@ -46,8 +46,9 @@ pub struct SceneDesc {
     pub background: Option<Rgb>,
     #[serde(default)]
     pub sphere: Vec<SphereDesc>,
-    /// What `ptui check` expects of this scene (see `crate::check`); ignored by rendering.
-    pub check: Option<crate::check::CheckDesc>,
+    /// What `ptui check` expects of this scene: read by the check code from the same text;
+    /// a scene only holds it.
+    pub check: Option<toml::Table>,
     /// Accelerator: auto (default), flat or bvh (see `accel`).
     pub accel: Option<crate::accel::AccelChoice>,
     #[serde(default)]

@@ -3,10 +3,11 @@
 
 use super::description::{MaterialDesc, MaterialName, MeshDesc, SceneDesc};
 use super::mesh::{self, Transform, MAX_MESH_TRIANGLES};
-use super::{builtin, BuildReport, Primitive, Scene, SceneError, Shape};
+use super::{builtin, BuildReport, Scene, SceneError};
 use crate::accel::{camera_probe, Accel, AccelChoice};
 use crate::camera::Camera;
 use crate::geometry::torus_knot::TorusKnot;
+use crate::geometry::{Primitive, Shape};
 use crate::geometry::{Sphere, Triangle};
 use crate::light::{sphere::SphereLight, triangle::TriangleLight, Light, Lights};
 use crate::material::{Material, MaterialKind};
@@ -80,6 +81,12 @@ pub fn load_str_with(src: &str, file: &str, options: &BuildOptions) -> Result<Sc
 }
 
 pub fn parse(src: &str, file: &str) -> Result<SceneDesc, SceneError> {
+    parse_as(src, file)
+}
+
+/// Parses the scene text into any serde type, with the same located errors as [`parse`]; the
+/// check code reads its own `[check]` table this way.
+pub fn parse_as<T: serde::de::DeserializeOwned>(src: &str, file: &str) -> Result<T, SceneError> {
     let de = toml::Deserializer::parse(src)
         .map_err(|e| SceneError::at(file, src, e.span(), None, e.message()))?;
     serde_path_to_error::deserialize(de).map_err(|e| {

@@ -11,7 +11,7 @@ pub mod obj;
 use crate::accel::lanes::RayBatch;
 use crate::accel::Accel;
 use crate::camera::Camera;
-use crate::geometry::{Aabb, Hit, Sphere, Triangle};
+use crate::geometry::{Aabb, Hit, Primitive};
 use crate::light::Lights;
 use crate::material::Material;
 use crate::math::{DVec3, Ray};
@@ -20,55 +20,6 @@ use std::time::Duration;
 
 pub use error::SceneError;
 pub use load::{load, load_str, load_str_with, load_with, BuildOptions};
-
-/// A geometric shape; a closed set dispatched by `match`.
-#[derive(Clone, Copy, Debug)]
-pub enum Shape {
-    Sphere(Sphere),
-    Triangle(Triangle),
-}
-
-impl Shape {
-    /// The sphere, if this is one.
-    #[inline]
-    pub fn as_sphere(&self) -> Option<&Sphere> {
-        match self {
-            Shape::Sphere(s) => Some(s),
-            Shape::Triangle(_) => None,
-        }
-    }
-
-    #[inline]
-    pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<f64> {
-        match self {
-            Shape::Sphere(s) => s.intersect(ray, t_max),
-            Shape::Triangle(t) => t.intersect(ray, t_max),
-        }
-    }
-
-    #[inline]
-    pub fn hit(&self, ray: &Ray, t: f64, prim: u32) -> Hit {
-        match self {
-            Shape::Sphere(s) => s.hit(ray, t, prim),
-            Shape::Triangle(tri) => tri.hit(ray, t, prim),
-        }
-    }
-
-    pub fn bounds(&self) -> Aabb {
-        match self {
-            Shape::Sphere(s) => s.bounds(),
-            Shape::Triangle(t) => t.bounds(),
-        }
-    }
-}
-
-/// A shape with its material and, if it emits, its index in [`Lights`].
-#[derive(Clone, Copy, Debug)]
-pub struct Primitive {
-    pub shape: Shape,
-    pub material: u32,
-    pub light: Option<u32>,
-}
 
 /// What the scene build chose, reported to the user.
 #[derive(Clone, Debug)]

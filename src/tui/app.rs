@@ -519,7 +519,7 @@ mod tests {
     fn a_running_render_shows_what_a_pass_has_reached_before_it_ends() {
         use rayon::prelude::*;
         let mut app = small_app();
-        let mut film = crate::film::Film::new(16, 12);
+        let mut film = crate::render::film::Film::new(16, 12);
         let image = film.mean_image();
         let snap = |status| {
             Arc::new(Snapshot {

@@ -5,8 +5,8 @@
 //! and shown only while it is `painterly` (they do nothing for the others).
 
 use super::color::{ColorChoice, ColorMode};
-use crate::integrator::painterly::params::{check_range, parse_unit, MAX_STROKE};
 use crate::sampling::SamplerKind;
+use crate::settings::painterly::{check_range, parse_unit, MAX_STROKE};
 use crate::settings::{
     Hemisphere, IntegratorKind, RenderSettings, SettingsOverrides, Tonemap, MAX_DIMENSION,
 };

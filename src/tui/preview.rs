@@ -13,7 +13,7 @@
 use super::color::ColorMode;
 use super::dither::{plan_for, Plan};
 use super::worker::Snapshot;
-use crate::output::display_rgb;
+use crate::io::output::display_rgb;
 use crate::settings::Tonemap;
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
@@ -252,7 +252,7 @@ impl PreviewCache {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::film::ErrorEstimate;
+    use crate::render::film::ErrorEstimate;
     use crate::render::RenderStats;
     use crate::tui::worker::JobStatus;
 
@@ -265,7 +265,7 @@ mod tests {
         }
         Snapshot {
             job: 1,
-            image: std::sync::Arc::new(crate::film::MeanImage::from_rgb(w, h, &rgb)),
+            image: std::sync::Arc::new(crate::render::film::MeanImage::from_rgb(w, h, &rgb)),
             stats: RenderStats::default(),
             error: ErrorEstimate::default(),
             target_spp: 1,

@@ -7,7 +7,7 @@
 
 use super::event::Event;
 use super::worker::Snapshot;
-use crate::output;
+use crate::io::output;
 use crate::settings::Tonemap;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::Sender;

@@ -677,7 +677,7 @@ fn draw_details(frame: &mut Frame, app: &App, area: Rect) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::film::{ErrorEstimate, MeanImage};
+    use crate::render::film::{ErrorEstimate, MeanImage};
     use crate::render::RenderStats;
     use crate::settings::SettingsOverrides;
     use crate::tui::color::{ColorChoice, ColorMode};

@@ -10,8 +10,8 @@
 //! newest command.
 
 use super::event::Event;
-use crate::film::{ErrorEstimate, MeanImage};
-use crate::film_file::{self, FilmHeader};
+use crate::io::film_file::{self, FilmHeader};
+use crate::render::film::{ErrorEstimate, MeanImage};
 use crate::render::{PassOutcome, RenderError, RenderStats, Renderer};
 use crate::scene::{self, Scene};
 use crate::settings::{RenderSettings, SettingsOverrides};

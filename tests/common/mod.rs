@@ -1,7 +1,7 @@
 //! Shared helpers for the integration tests: rendering a scene to a film, and statistics.
 #![allow(dead_code)]
 
-use ptui::film::Film;
+use ptui::render::film::Film;
 use ptui::render::Renderer;
 use ptui::scene::{self, Scene};
 use ptui::settings::{RenderSettings, SettingsOverrides};

@@ -11,8 +11,8 @@
 //! estimate, ends after `--seconds`) reports the errors of its last checkpoint instead.
 
 use super::{HEIGHT, THREADS, WIDTH};
-use crate::convergence::{self, Metric, Series};
-use crate::reference::{self, LinearImage};
+use crate::analysis::convergence::{self, Metric, Series};
+use crate::analysis::reference::{self, LinearImage};
 use crate::render::build_pool;
 use crate::sampling::SamplerKind;
 use crate::scene;
@@ -427,7 +427,7 @@ pub fn ratios(bench: &ErrorBench) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::convergence::Checkpoint;
+    use crate::analysis::convergence::Checkpoint;
 
     fn series(integrator: &str, pts: &[(f64, f64)]) -> Series {
         Series {

@@ -5,7 +5,7 @@
 //! `BIN` is `benches/smallpt/smallpt.cpp` built with `g++ -O3 -fopenmp`: it renders whole-image
 //! passes of 4 spp for a time budget and writes its unclamped mean as linear PFM.
 
-use crate::reference::{self, LinearImage};
+use crate::analysis::reference::{self, LinearImage};
 use anyhow::Context;
 use std::path::Path;
 use std::process::Command;

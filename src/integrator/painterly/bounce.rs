@@ -15,8 +15,8 @@
 //! perpendicular to z it is the half of the cosine lobe with w_z >= 0 (h_z = 2 (N.w) w_z and
 //! N.w > 0). The `hemisphere = "normal"` mode is the N = +z case in the normal's own frame.
 
-use super::params::Hemisphere;
 use crate::math::{DVec3, Frame};
+use crate::settings::painterly::Hemisphere;
 use std::f64::consts::{FRAC_1_PI, PI};
 
 /// smallpaint's `hemisphere(u1, u2)`: z = u1 and azimuth 2 pi u2. Uniform on the hemisphere

@@ -28,8 +28,8 @@
 //! independent of u1 makes u1 + xi mod 1 so), and in between u2 stays uniform while lying within
 //! a band of width 1 - correlation after u1.
 
-use super::params::PainterlyParams;
 use crate::sampling::rng::mix64;
+use crate::settings::painterly::PainterlyParams;
 
 const SALT_ROW: u64 = 0x5041_494e_5452_4f57; // "PAINTROW"
 const SALT_SEGMENT: u64 = 0x5041_494e_5453_4547; // "PAINTSEG"

@@ -18,9 +18,9 @@
 //! rendered with the same settings and the next seed, so the two renders are independent.
 
 pub mod extreme;
-pub mod stats;
 
-use crate::film::Film;
+use crate::analysis::stats;
+use crate::render::film::Film;
 use crate::render::{build_pool, RenderError, Renderer};
 use crate::sampling::SamplerKind;
 use crate::scene::description::{de_count, de_dimension, Rgb};
@@ -52,6 +52,13 @@ pub struct CheckDesc {
     pub same_as: Option<String>,
     pub mean: Option<Rgb>,
     pub range: Option<Range>,
+}
+
+/// The part of a scene file the check code reads; the rest is the scene's.
+#[derive(Default, Deserialize)]
+struct CheckFile {
+    #[serde(default)]
+    check: Option<CheckDesc>,
 }
 
 /// `[lo, hi]` with 0 <= lo <= hi, finite.
@@ -182,12 +189,18 @@ pub struct Options {
     pub threads: Option<usize>,
 }
 
+/// The `[check]` table of `source` (defaults where it has none), read from the same text as
+/// the scene with the same located errors.
+pub fn check_desc(source: &Source) -> Result<CheckDesc, SceneError> {
+    let file: CheckFile = scene::load::parse_as(&source.text, &source.name)?;
+    Ok(file.check.unwrap_or_default())
+}
+
 /// Render `source` as its `[check]` table says and test it.
 pub fn run(source: &Source, options: &Options) -> Result<Outcome, CheckError> {
     let started = Instant::now();
-    let desc = scene::load::parse(&source.text, &source.name)?;
-    let check = desc.check.clone().unwrap_or_default();
     let scene = Arc::new(scene::load_str(&source.text, &source.name)?);
+    let check = check_desc(source)?;
     let layer = SettingsOverrides {
         width: Some(check.width.unwrap_or(DEFAULT_SIZE.0)),
         height: Some(check.height.unwrap_or(DEFAULT_SIZE.1)),

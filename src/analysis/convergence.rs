@@ -1,6 +1,6 @@
 //! Error against render time: run a renderer, measure the error at log-spaced checkpoints, fit
 //! the convergence rate, compare integrators at equal time, and write the CSV that `ptui converge`
-//! produces (the plot is in [`crate::plot`]).
+//! produces (the plot is in [`crate::analysis::plot`]).
 //!
 //! Time is [`RenderStats::elapsed`](crate::render::RenderStats): wall time spent in passes, so
 //! neither the scene build nor the measurements at the checkpoints count. Checkpoints are taken
@@ -18,7 +18,7 @@
 //! - `rmse`, `rel_mse`: measured against the reference (DESIGN.md's metrics); empty without one
 //! - `est_rmse`: the film's own estimate of its RMSE (RMS of the per-pixel standard errors)
 
-use crate::reference::{self, LinearImage};
+use crate::analysis::reference::{self, LinearImage};
 use crate::render::{PassOutcome, RenderError, Renderer};
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;

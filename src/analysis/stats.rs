@@ -28,7 +28,7 @@
 //! F / n and the variance estimate by F^2 / n^2, so it contributes |z| ~ 1, not a false alarm; a
 //! pixel where k rare samples all landed in one render reaches only |z| ~ sqrt(k).
 
-use crate::film::Film;
+use crate::render::film::Film;
 
 /// Family-wise false-alarm probability of one check (split between its tests).
 pub const ALPHA: f64 = 0.01;

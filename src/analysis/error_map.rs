@@ -8,8 +8,8 @@
 //!   percentile over the image and clamped to 1, no gamma: a picture, normalised so that a few
 //!   fireflies do not turn everything else black. The scale is returned so it can be reported.
 
-use crate::film::Film;
-use crate::output::{self, OutputError};
+use crate::io::output::{self, OutputError};
+use crate::render::film::Film;
 use image::{GrayImage, ImageFormat, Rgb32FImage};
 use std::io::Cursor;
 use std::path::{Path, PathBuf};

@@ -30,7 +30,7 @@
 //! pixel with the film's 56 and a pass's caustic state (see
 //! [`crate::integrator::caustics::VERTICES_PER_PATH`]).
 
-use crate::film::Film;
+use crate::render::film::Film;
 use rayon::prelude::*;
 
 /// Uniform passes before the map is built. Even, so the map starts on an even pass and both

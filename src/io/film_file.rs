@@ -14,8 +14,8 @@
 //! implies and the checksum, and names the file and the field of anything wrong. Writing goes
 //! through a temporary file and a rename, so a film file is whole or absent.
 
-use crate::adaptive::SampleMap;
-use crate::film::{Film, PixelState};
+use crate::render::adaptive::SampleMap;
+use crate::render::film::{Film, PixelState};
 use crate::render::RenderStats;
 use crate::sampling::SamplerKind;
 use crate::settings::{Caustics, IntegratorKind, RenderSettings, Tonemap};
@@ -451,7 +451,7 @@ pub fn write(
         path: path.to_path_buf(),
         why: e.to_string(),
     })?;
-    crate::output::write_atomic_with(path, &[], |f, _| {
+    crate::io::output::write_atomic_with(path, &[], |f, _| {
         let mut w = Crc {
             inner: BufWriter::with_capacity(1 << 20, f),
             crc: crc32fast::Hasher::new(),
@@ -474,7 +474,7 @@ pub fn write(
         inner.flush()
     })
     .map_err(|e| match e {
-        crate::output::OutputError::Io { source, .. } => io(source),
+        crate::io::output::OutputError::Io { source, .. } => io(source),
         other => io(std::io::Error::other(other.to_string())),
     })
 }

@@ -6,12 +6,12 @@
 //! Text needs a font and a fresh machine may have none, so DejaVu Sans (Bitstream Vera licence,
 //! `assets/DejaVuSans-LICENSE.txt`) is embedded in the binary and registered with plotters.
 
-use crate::convergence::{fit_series, Fit, Metric, Series};
+use crate::analysis::convergence::{fit_series, Fit, Metric, Series};
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 use std::sync::OnceLock;
 
-const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+const FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 const FAMILY: &str = "sans-serif";
 
 /// Size of the PNG.

@@ -13,9 +13,9 @@
 //! [`crate::render::Renderer::pilot_map`]); every shard's film file carries the map, and a merge
 //! checks they agree.
 
-use crate::adaptive::SampleMap;
-use crate::film::Film;
-use crate::film_file::{self, FilmFileError, FilmHeader};
+use crate::io::film_file::{self, FilmFileError, FilmHeader};
+use crate::render::adaptive::SampleMap;
+use crate::render::film::Film;
 use std::path::{Path, PathBuf};
 
 /// Shard `index` of `count` (0-based).

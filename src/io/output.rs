@@ -2,7 +2,7 @@
 //! into a temporary file beside the target, fsync, rename), so an existing file is never left
 //! truncated and a failed save loses nothing.
 
-use crate::film::{Film, MeanImage};
+use crate::render::film::{Film, MeanImage};
 use crate::settings::Tonemap;
 use image::ImageFormat;
 use std::io::{BufWriter, Cursor, Write};

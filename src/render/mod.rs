@@ -6,12 +6,15 @@
 //! the thread count. A cancelled pass still counts as started: resuming goes on with the next pass
 //! index, so no pixel ever reuses a random stream.
 
-use crate::adaptive::{SampleMap, PILOT_PASSES};
+pub mod adaptive;
+pub mod film;
+
 use crate::cpu::{v3_copy, ShadingCode};
-use crate::film::{ErrorEstimate, Film, FilmRows};
 use crate::integrator;
 use crate::integrator::caustics::{CausticPass, CausticTracer, PassSplats};
 use crate::math::{DVec3, Ray};
+use crate::render::adaptive::{SampleMap, PILOT_PASSES};
+use crate::render::film::{ErrorEstimate, Film, FilmRows};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::settings::{IntegratorKind, RenderSettings};
@@ -176,7 +179,7 @@ impl Renderer {
     }
 
     /// The error estimate suited to the sampler in use.
-    pub fn error_estimate(&self) -> crate::film::ErrorEstimate {
+    pub fn error_estimate(&self) -> crate::render::film::ErrorEstimate {
         self.film.error_estimate(self.error_from_halves())
     }
 

@@ -18,8 +18,10 @@
 //! strength = 1.0
 //! ```
 
-pub use crate::integrator::painterly::params::{Hemisphere, PainterlyOverrides, PainterlyParams};
+pub mod painterly;
+
 use crate::sampling::SamplerKind;
+pub use painterly::{Hemisphere, PainterlyOverrides, PainterlyParams};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
