@@ -10,6 +10,7 @@
 pub mod accel;
 pub mod analysis;
 pub mod camera;
+pub mod checked;
 pub mod cli;
 pub mod cpu;
 pub mod geometry;

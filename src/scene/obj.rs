@@ -9,7 +9,7 @@
 //! huge coordinate, an index of 0 or out of range, a truncated statement or a word that is not a
 //! number is an error `file:line: reason`. Nothing here panics on any input.
 
-use crate::scene::description::MAX_MAGNITUDE;
+use crate::checked::MAX_MAGNITUDE;
 use std::path::Path;
 
 /// No normal: the corner or face is flat-shaded.

@@ -145,11 +145,7 @@ impl Default for RenderSettings {
     }
 }
 
-/// Largest width or height accepted; the film's memory is checked separately.
-pub const MAX_DIMENSION: u32 = 1 << 15;
-
-/// Most worker threads accepted from any layer (scene file, CLI, TUI).
-pub const MAX_THREADS: usize = 1024;
+pub use crate::checked::{MAX_DIMENSION, MAX_THREADS};
 
 /// Bytes of render state per pixel (film sums, counts, snapshot); see `film`.
 pub const BYTES_PER_PIXEL: u64 = 64;
@@ -158,11 +154,11 @@ pub const BYTES_PER_PIXEL: u64 = 64;
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SettingsOverrides {
-    #[serde(default, deserialize_with = "crate::scene::description::de_dimension")]
+    #[serde(default, deserialize_with = "crate::checked::de_dimension")]
     pub width: Option<u32>,
-    #[serde(default, deserialize_with = "crate::scene::description::de_dimension")]
+    #[serde(default, deserialize_with = "crate::checked::de_dimension")]
     pub height: Option<u32>,
-    #[serde(default, deserialize_with = "crate::scene::description::de_count")]
+    #[serde(default, deserialize_with = "crate::checked::de_count")]
     pub spp: Option<u32>,
     pub seed: Option<u64>,
     pub integrator: Option<IntegratorKind>,
@@ -171,18 +167,18 @@ pub struct SettingsOverrides {
     pub max_depth: Option<u32>,
     #[serde(
         default,
-        deserialize_with = "crate::scene::description::de_positive_opt"
+        deserialize_with = "crate::checked::de_positive_opt"
     )]
     pub exposure: Option<f64>,
     pub tonemap: Option<Tonemap>,
-    #[serde(default, deserialize_with = "crate::scene::description::de_threads")]
+    #[serde(default, deserialize_with = "crate::checked::de_threads")]
     pub threads: Option<usize>,
     /// The `[render.painterly]` table.
     #[serde(default)]
     pub painterly: PainterlyOverrides,
     #[serde(
         default,
-        deserialize_with = "crate::scene::description::de_positive_opt"
+        deserialize_with = "crate::checked::de_positive_opt"
     )]
     pub target_error: Option<f64>,
     pub adaptive: Option<bool>,
@@ -235,7 +231,7 @@ impl RenderSettings {
             return Err("spp must be at least 1".into());
         }
         // The tonemapper works in f32: keep exposure well inside its range.
-        use crate::scene::description::{MAX_MAGNITUDE as MAX, MIN_MAGNITUDE as MIN};
+        use crate::checked::{MAX_MAGNITUDE as MAX, MIN_MAGNITUDE as MIN};
         if !(MIN..=MAX).contains(&self.exposure) {
             return Err(format!(
                 "exposure must be a number between {MIN:e} and {MAX:e}, got {}",

@@ -23,7 +23,7 @@ use crate::analysis::stats;
 use crate::render::film::Film;
 use crate::render::{build_pool, RenderError, Renderer};
 use crate::sampling::SamplerKind;
-use crate::scene::description::{de_count, de_dimension, Rgb};
+use crate::checked::{de_count, de_dimension, Rgb};
 use crate::scene::{self, builtin, SceneError};
 use crate::settings::{RenderSettings, SettingsOverrides};
 use serde::de::{self, Deserializer};
