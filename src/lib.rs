@@ -22,5 +22,9 @@ pub mod math;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod session;
 pub mod settings;
 pub mod tui;
+
+#[cfg(test)]
+mod layers;

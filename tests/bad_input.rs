@@ -97,11 +97,31 @@ fn cases() -> Vec<(String, &'static str, &'static str)> {
 /// render ignores it and `check_desc` reports it with the scene's located errors.
 fn check_cases() -> Vec<(String, &'static str, &'static str)> {
     vec![
-        (format!("{CAMERA}\n[check]\nspp = 1 #!\n"), "check.spp", "at least 2 samples"),
-        (format!("{CAMERA}\n[check]\nrange = [2, 1] #!\n"), "check.range", "lo <= hi"),
-        (format!("{CAMERA}\n[check]\nrange = [0, nan] #!\n"), "check.range", "finite"),
-        (format!("{CAMERA}\n[check]\nmean = -1 #!\n"), "check.mean", "must be >= 0"),
-        (format!("{CAMERA}\n[check]\nexpect = 1 #!\n"), "check.expect", "unknown field `expect`"),
+        (
+            format!("{CAMERA}\n[check]\nspp = 1 #!\n"),
+            "check.spp",
+            "at least 2 samples",
+        ),
+        (
+            format!("{CAMERA}\n[check]\nrange = [2, 1] #!\n"),
+            "check.range",
+            "lo <= hi",
+        ),
+        (
+            format!("{CAMERA}\n[check]\nrange = [0, nan] #!\n"),
+            "check.range",
+            "finite",
+        ),
+        (
+            format!("{CAMERA}\n[check]\nmean = -1 #!\n"),
+            "check.mean",
+            "must be >= 0",
+        ),
+        (
+            format!("{CAMERA}\n[check]\nexpect = 1 #!\n"),
+            "check.expect",
+            "unknown field `expect`",
+        ),
     ]
 }
 
@@ -116,7 +136,8 @@ fn marked_line(src: &str) -> usize {
 fn every_bad_value_is_named_with_file_line_and_field() {
     let mut failures = Vec::new();
     let checks = check_cases().into_iter().map(|c| (c, true));
-    for ((src, field, fragment), is_check) in cases().into_iter().map(|c| (c, false)).chain(checks) {
+    for ((src, field, fragment), is_check) in cases().into_iter().map(|c| (c, false)).chain(checks)
+    {
         let line = marked_line(&src);
         let loaded = if is_check {
             let source = Source {

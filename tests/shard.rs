@@ -499,9 +499,8 @@ fn the_adaptive_map_survives_the_film_file() {
 /// render of that many, bit for bit.
 #[test]
 fn the_tui_worker_saves_and_continues_films() {
+    use ptui::session::{Command, JobStatus, Request, SessionEvent, SessionHandle};
     use ptui::settings::SettingsOverrides;
-    use ptui::tui::event::Event;
-    use ptui::tui::worker::{Command, JobStatus, Request, WorkerEvent, WorkerHandle};
     use std::time::Duration;
     let dir = tempfile::tempdir().expect("tempdir");
     let (saved, continued) = (dir.path().join("tui.film"), dir.path().join("more.film"));
@@ -509,11 +508,15 @@ fn the_tui_worker_saves_and_continues_films() {
     // save its film to `to`.
     let run = |layer: SettingsOverrides, resume: Option<&Path>, spp: u32, to: &Path| {
         let (tx, rx) = std::sync::mpsc::channel();
-        let w = WorkerHandle::spawn(tx, Duration::from_millis(20)).expect("worker");
+        let sink = Box::new(move |e| {
+            let _ = tx.send(e);
+        });
+        let w = SessionHandle::spawn(sink, Duration::from_millis(20)).expect("worker");
         w.send(Command::Start(Request {
             id: 1,
             scene: "cornell".into(),
-            layers: vec![layer],
+            cli: layer,
+            form: SettingsOverrides::default(),
             fresh: true,
         }));
         if let Some(p) = resume {
@@ -521,19 +524,22 @@ fn the_tui_worker_saves_and_continues_films() {
         }
         loop {
             match rx.recv_timeout(Duration::from_secs(120)).expect("an event") {
-                Event::Render(WorkerEvent::Progress(s))
+                SessionEvent::Progress(s)
                     if s.status == JobStatus::Done && s.stats.complete_passes == spp =>
                 {
                     break
                 }
-                Event::Render(WorkerEvent::Failed { message, .. })
-                | Event::Render(WorkerEvent::Panicked(message)) => panic!("{message}"),
+                SessionEvent::Failed { message, .. } | SessionEvent::Panicked(message) => {
+                    panic!("{message}")
+                }
                 _ => {}
             }
         }
         w.send_after_batch(Command::SaveFilm(to.to_path_buf()));
         loop {
-            if let Event::Saved(r) = rx.recv_timeout(Duration::from_secs(60)).expect("saved") {
+            if let SessionEvent::FilmSaved(r) =
+                rx.recv_timeout(Duration::from_secs(60)).expect("saved")
+            {
                 assert_eq!(r.expect("the film saved"), to);
                 break;
             }

@@ -9,11 +9,11 @@
 mod common;
 
 use ptui::scene;
+use ptui::session::{JobStatus, Snapshot};
 use ptui::settings::{SettingsOverrides, Tonemap};
 use ptui::tui::color::ColorMode;
 use ptui::tui::dither::ansi256_rgb;
 use ptui::tui::preview::{PreviewCache, ViewState};
-use ptui::tui::worker::{JobStatus, Snapshot};
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::Color;

@@ -86,7 +86,7 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<ConvergeReport> {
         max_depth: args.max_depth,
         ..Default::default()
     };
-    let base = RenderSettings::merged(&[&scene.render, &cli]);
+    let base = RenderSettings::resolve(&scene.render, &cli, None);
     base.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let reference = match &args.reference {
         Some(path) => {

@@ -42,7 +42,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let scene = Arc::new(scene::load_with(&spec, &options)?);
     let hash = film_file::scene_hash(&spec).map_err(|e| anyhow::anyhow!("scene hash: {e}"))?;
     let overrides = args.settings.overrides();
-    let mut settings = RenderSettings::merged(&[&scene.render, &overrides]);
+    let mut settings = RenderSettings::resolve(&scene.render, &overrides, None);
     if let Some((h, _, _)) = &resumed {
         settings = resume_settings(args, h, &hash, settings)?;
     }

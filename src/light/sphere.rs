@@ -26,12 +26,8 @@ const CONE_SHARE: f64 = 0.5;
 /// Caps at most this high (1 - cos of their half-angle; smallpt's light pokes a cap of
 /// 0.27 / 600 = 4.5e-4 through its ceiling) are sampled by area alone from everywhere: across
 /// a cap that flat the normal turns by at most 8 degrees, and area sampling is a flat light's
-/// (a disc's) usual technique. On cornell the mixture with the cone lost on both counts: at
-/// 64 spp, seeds 1-6, area alone has 0.928x its MSE against the reference, and it renders
-/// 1.04-1.10x as many samples a second (CPU time and wall rounds, alternated); the cone's share
-/// at 0.25 / 0.75 gave 0.96x / 1.06x the MSE. Where the cap is seen at a grazing angle it fills
-/// little of the cone, and the cone's samples that miss it are lost. Curved caps keep the
-/// mixture (unmeasured there).
+/// (a disc's) usual technique; the cone's draws that miss a cap seen at a grazing angle are
+/// lost. Curved caps keep the mixture. Runs: benches/HISTORY.md ("flat caps").
 const FLAT_CAP: f64 = 0.01;
 
 /// At most this many cuts are kept per light (the smallest caps).
@@ -139,9 +135,8 @@ pub struct SphereLight {
     clips: [Option<Clip>; MAX_CLIPS],
 }
 
-/// How directions towards the light are chosen from a shading point. Caps are borrowed: with
-/// their frame they are 136 bytes, and copying them per light sample was 1% of a cornell render's
-/// instructions.
+/// How directions towards the light are chosen from a shading point. Caps are borrowed, not
+/// copied: with their frame they are 136 bytes, and this runs for every light sample.
 enum Strategy<'a> {
     /// Strictly inside: every direction reaches the sphere.
     Inside,

@@ -31,7 +31,7 @@
 //! ```
 
 pub use crate::checked::{
-    Albedo, Dir, Fov, Ior, NonNegative, Positive, Rgb, V3, IOR_RANGE, MAX_MAGNITUDE, MIN_MAGNITUDE,
+    Albedo, Dir, Fov, Ior, NonNegative, Positive, Rgb, IOR_RANGE, MAX_MAGNITUDE, MIN_MAGNITUDE, V3,
 };
 use crate::settings::SettingsOverrides;
 use serde::Deserialize;

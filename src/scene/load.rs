@@ -2,7 +2,8 @@
 //! (cross-field constraints, duplicate names), and choose the machinery this scene needs.
 
 use super::description::{MaterialDesc, MaterialName, MeshDesc, SceneDesc};
-use super::mesh::{self, Transform, MAX_MESH_TRIANGLES};
+use super::mesh::{self, Transform};
+use super::MAX_MESH_TRIANGLES;
 use super::{builtin, BuildReport, Scene, SceneError};
 use crate::accel::{camera_probe, Accel, AccelChoice};
 use crate::camera::Camera;

@@ -23,10 +23,6 @@ use crate::math::DVec3;
 use glam::DMat3;
 use std::path::Path;
 
-/// Most triangles all meshes of one scene may hold together. A triangle primitive takes about
-/// 100 bytes (plus the BVH's share), so this bounds a scene's geometry at roughly 0.5 GB.
-pub const MAX_MESH_TRIANGLES: u64 = 4_000_000;
-
 /// Scale, then rotate (degrees about x, then y, then z), then translate.
 #[derive(Clone, Copy, Debug)]
 pub struct Transform {

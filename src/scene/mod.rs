@@ -21,6 +21,10 @@ use std::time::Duration;
 pub use error::SceneError;
 pub use load::{load, load_str, load_str_with, load_with, BuildOptions};
 
+/// Most triangles all meshes of one scene may hold together. A triangle primitive takes about
+/// 100 bytes (plus the BVH's share), so this bounds a scene's geometry at roughly 0.5 GB.
+pub const MAX_MESH_TRIANGLES: u64 = 4_000_000;
+
 /// What the scene build chose, reported to the user.
 #[derive(Clone, Debug)]
 pub struct BuildReport {

@@ -134,7 +134,7 @@ pub fn parse(bytes: &[u8], name: &str, limit: u64) -> Result<ObjData, String> {
                     return Err(format!(
                         "{name}: has more than {limit} triangles, the most this scene has room \
                          for (at most {} mesh triangles per scene)",
-                        super::mesh::MAX_MESH_TRIANGLES
+                        super::MAX_MESH_TRIANGLES
                     ));
                 }
                 faces.push(Face { start, len });

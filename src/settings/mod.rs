@@ -165,10 +165,7 @@ pub struct SettingsOverrides {
     pub sampler: Option<SamplerKind>,
     pub caustics: Option<Caustics>,
     pub max_depth: Option<u32>,
-    #[serde(
-        default,
-        deserialize_with = "crate::checked::de_positive_opt"
-    )]
+    #[serde(default, deserialize_with = "crate::checked::de_positive_opt")]
     pub exposure: Option<f64>,
     pub tonemap: Option<Tonemap>,
     #[serde(default, deserialize_with = "crate::checked::de_threads")]
@@ -176,10 +173,7 @@ pub struct SettingsOverrides {
     /// The `[render.painterly]` table.
     #[serde(default)]
     pub painterly: PainterlyOverrides,
-    #[serde(
-        default,
-        deserialize_with = "crate::checked::de_positive_opt"
-    )]
+    #[serde(default, deserialize_with = "crate::checked::de_positive_opt")]
     pub target_error: Option<f64>,
     pub adaptive: Option<bool>,
 }
@@ -201,6 +195,20 @@ impl RenderSettings {
         if let Some(e) = o.target_error {
             self.target_error = Some(e);
         }
+    }
+
+    /// The settings of a render: defaults, then the scene file's `[render]` table, the command
+    /// line, and the TUI form (none outside the TUI). The one place that order is decided.
+    pub fn resolve(
+        scene: &SettingsOverrides,
+        cli: &SettingsOverrides,
+        form: Option<&SettingsOverrides>,
+    ) -> Self {
+        let mut s = Self::merged(&[scene, cli]);
+        if let Some(form) = form {
+            s.apply(form);
+        }
+        s
     }
 
     /// Defaults, then each layer in order.

@@ -3,10 +3,10 @@
 
 use super::color::{ColorChoice, ColorMode};
 use super::form::{Field, Form, Shown};
+use super::layout::layout;
 use super::preview::{PreviewCache, ViewState};
 use super::save::SaveKind;
-use super::view;
-use super::worker::{BuildNotes, JobStatus, Request, Snapshot, WorkerEvent};
+use crate::session::{BuildNotes, JobStatus, Request, SessionEvent, Snapshot};
 use crate::settings::{RenderSettings, SettingsOverrides};
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use ratatui::layout::Rect;
@@ -110,7 +110,7 @@ impl App {
 
     /// The settings in effect: defaults, scene file, CLI, form.
     pub fn settings(&self) -> RenderSettings {
-        RenderSettings::merged(&[&self.scene_render, &self.cli, &self.form.overrides])
+        RenderSettings::resolve(&self.scene_render, &self.cli, Some(&self.form.overrides))
     }
 
     pub fn status(&self) -> Option<JobStatus> {
@@ -124,7 +124,8 @@ impl App {
         Request {
             id: self.next_request,
             scene: self.form.scene.clone(),
-            layers: vec![self.cli.clone(), self.form.overrides.clone()],
+            cli: self.cli.clone(),
+            form: self.form.overrides.clone(),
             fresh,
         }
     }
@@ -142,7 +143,7 @@ impl App {
         let Some(snap) = self.snapshot.clone() else {
             return;
         };
-        let Some(area) = view::layout(self.size, self).preview else {
+        let Some(area) = layout(self.size, self.show_chart).preview else {
             return;
         };
         let s = self.settings();
@@ -189,7 +190,7 @@ impl App {
     }
 
     /// A worker event; returns whether the screen changed.
-    pub fn on_worker(&mut self, ev: WorkerEvent) -> bool {
+    pub fn on_worker(&mut self, ev: SessionEvent) -> bool {
         let changed = self.on_worker_event(ev);
         // A new scene's `[render]` table or a rolled-back form may change the integrator, and
         // with it which fields the form shows.
@@ -197,9 +198,9 @@ impl App {
         changed
     }
 
-    fn on_worker_event(&mut self, ev: WorkerEvent) -> bool {
+    fn on_worker_event(&mut self, ev: SessionEvent) -> bool {
         match ev {
-            WorkerEvent::Started {
+            SessionEvent::Started {
                 request,
                 restarted,
                 settings: _,
@@ -221,7 +222,11 @@ impl App {
                     self.history.clear();
                 }
             }
-            WorkerEvent::Progress(snap) => {
+            SessionEvent::FilmSaved(result) => {
+                self.on_saved(result);
+                return true;
+            }
+            SessionEvent::Progress(snap) => {
                 let new_job = self.snapshot.as_ref().is_none_or(|s| s.job != snap.job);
                 if new_job {
                     self.history.clear();
@@ -244,7 +249,7 @@ impl App {
                     self.pending = Some(snap);
                 }
             }
-            WorkerEvent::Failed { request, message } => {
+            SessionEvent::Failed { request, message } => {
                 if self.accepted.is_none() && self.snapshot.is_none() {
                     self.fatal = Some(message);
                     self.quit = true;
@@ -258,7 +263,7 @@ impl App {
                 }
                 self.message = Some(Message::Error(message));
             }
-            WorkerEvent::Panicked(msg) => {
+            SessionEvent::Panicked(msg) => {
                 self.worker_panic = Some(msg);
             }
         }
@@ -453,9 +458,9 @@ impl App {
 mod tests {
     use super::*;
     use crate::sampling::SamplerKind;
+    use crate::session::{Command, SessionHandle};
     use crate::settings::{Hemisphere, IntegratorKind};
     use crate::tui::event::Event;
-    use crate::tui::worker::{Command, WorkerHandle};
     use std::sync::mpsc::{self, Receiver};
     use std::time::Duration;
 
@@ -483,8 +488,8 @@ mod tests {
             match rx.recv_timeout(Duration::from_secs(120)) {
                 Ok(Event::Render(ev)) => {
                     let done = match &ev {
-                        WorkerEvent::Progress(s) if s.status == JobStatus::Done => Some(s.clone()),
-                        WorkerEvent::Failed { message, .. } => panic!("{message}"),
+                        SessionEvent::Progress(s) if s.status == JobStatus::Done => Some(s.clone()),
+                        SessionEvent::Failed { message, .. } => panic!("{message}"),
                         _ => None,
                     };
                     app.on_worker(ev);
@@ -532,7 +537,7 @@ mod tests {
                 status,
             })
         };
-        app.on_worker(WorkerEvent::Progress(snap(JobStatus::Running)));
+        app.on_worker(SessionEvent::Progress(snap(JobStatus::Running)));
         assert!(
             app.preview.changed > 0,
             "the first snapshot draws the (black) image"
@@ -556,7 +561,7 @@ mod tests {
             "{changed} of {all} sub-pixels"
         );
         // A finished or paused render is not refreshed: its image does not move.
-        app.on_worker(WorkerEvent::Progress(snap(JobStatus::Done)));
+        app.on_worker(SessionEvent::Progress(snap(JobStatus::Done)));
         app.apply_pending();
         app.preview_at = Some((long_ago, Duration::ZERO));
         assert!(!app.refresh_live());
@@ -582,10 +587,7 @@ mod tests {
         press(&mut app, &[KeyCode::Tab]);
         assert_eq!(app.form.field(), Field::Hemisphere);
         let reqs = press(&mut app, &[KeyCode::Enter]);
-        assert_eq!(
-            reqs[0].layers[1].painterly.hemisphere,
-            Some(Hemisphere::Normal)
-        );
+        assert_eq!(reqs[0].form.painterly.hemisphere, Some(Hemisphere::Normal));
 
         // A bad stroke is an error message and the edit stays open; a good one is a request.
         press(&mut app, &[KeyCode::Tab, KeyCode::Tab]);
@@ -605,7 +607,7 @@ mod tests {
         keys.push(KeyCode::Enter);
         let reqs = press(&mut app, &keys);
         assert_eq!(reqs.len(), 1);
-        assert_eq!(reqs[0].layers[1].painterly.stroke, Some(4));
+        assert_eq!(reqs[0].form.painterly.stroke, Some(4));
         assert_eq!(
             (app.message.clone(), app.form.editing.clone()),
             (None, None)
@@ -623,7 +625,7 @@ mod tests {
         press(&mut app, &[KeyCode::Tab]);
         assert_eq!(app.form.field(), Field::Sampler);
         let reqs = press(&mut app, &[KeyCode::Enter]);
-        assert_eq!(reqs[0].layers[1].sampler, Some(SamplerKind::Independent));
+        assert_eq!(reqs[0].form.sampler, Some(SamplerKind::Independent));
         assert_eq!(app.settings().painterly.stroke, 4);
     }
 
@@ -631,7 +633,7 @@ mod tests {
     fn a_rolled_back_integrator_takes_the_selection_off_a_hidden_field() {
         let mut app = small_app();
         let first = app.request(true);
-        app.on_worker(WorkerEvent::Started {
+        app.on_worker(SessionEvent::Started {
             request: first.id,
             job: 0,
             restarted: true,
@@ -650,7 +652,7 @@ mod tests {
         assert_eq!(app.form.field(), Field::Stroke);
         assert_eq!(app.form.editing.as_deref(), Some("16"));
         // The painterly request fails: the form goes back to path, stroke is hidden again.
-        app.on_worker(WorkerEvent::Failed {
+        app.on_worker(SessionEvent::Failed {
             request: reqs[1].id,
             message: "no".into(),
         });
@@ -665,7 +667,10 @@ mod tests {
     #[test]
     fn changing_a_painterly_field_or_the_sampler_restarts_the_render() {
         let (tx, rx) = mpsc::channel();
-        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let to_ui = Box::new(move |e| {
+            let _ = tx.send(Event::Render(e));
+        });
+        let worker = SessionHandle::spawn(to_ui, Duration::ZERO).unwrap();
         let mut app = small_app();
         app.form.overrides.integrator = Some(IntegratorKind::Painterly);
         worker.send(Command::Start(app.request(true)));

@@ -1,7 +1,7 @@
 //! The UI's one event channel and the threads that feed it: terminal input (key presses and
 //! resizes), a tick, termination signals; the render worker and save threads send on it too.
 
-use super::worker::WorkerEvent;
+use crate::session::SessionEvent;
 use crossterm::event::{self as ct, KeyEvent, KeyEventKind};
 use std::path::PathBuf;
 use std::sync::mpsc::Sender;
@@ -15,7 +15,7 @@ pub enum Event {
     Key(KeyEvent, Instant),
     Resize(u16, u16),
     Tick,
-    Render(WorkerEvent),
+    Render(SessionEvent),
     /// A save finished: the path written, or what went wrong.
     Saved(Result<PathBuf, String>),
     /// SIGTERM, SIGHUP, SIGINT or SIGQUIT: leave cleanly.

@@ -1,7 +1,8 @@
 //! The terminal UI: `ptui [SCENE]`.
 //!
 //! One event channel feeds the UI thread: key presses and resizes (input thread), ticks, signals,
-//! render progress (the worker, see [`worker`]) and finished saves. The loop waits for an event,
+//! render progress (the render session, see [`crate::session`], whose events are mapped into
+//! this channel) and finished saves. The loop waits for an event,
 //! updates the [`app::App`] model, and draws the [`view`] (a function of the model) at most
 //! `--fps` times a second for render progress, at once for a key press. Frames are wrapped in
 //! synchronized-update sequences so the terminal never shows half a frame.
@@ -11,12 +12,13 @@ pub mod color;
 pub mod dither;
 pub mod event;
 pub mod form;
+pub mod layout;
 pub mod preview;
 pub mod save;
 pub mod term;
 pub mod view;
-pub mod worker;
 
+use crate::session::{Command, SessionHandle};
 use crate::settings::SettingsOverrides;
 use anyhow::Context;
 use app::{Action, App};
@@ -29,7 +31,6 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::{Duration, Instant};
-use worker::{Command, WorkerHandle};
 
 /// How the TUI was asked to run (from the command line).
 #[derive(Clone, Debug)]
@@ -58,7 +59,13 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
     };
     let frame_time = Duration::from_secs_f64(1.0 / opts.fps.max(1) as f64);
     let (tx, rx) = mpsc::channel();
-    let worker = WorkerHandle::spawn(tx.clone(), frame_time)?;
+    let to_ui = tx.clone();
+    let worker = SessionHandle::spawn(
+        Box::new(move |e| {
+            let _ = to_ui.send(Event::Render(e));
+        }),
+        frame_time,
+    )?;
     let mut app = App::new(
         opts.scene.clone(),
         opts.cli.clone(),

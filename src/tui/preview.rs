@@ -12,8 +12,8 @@
 
 use super::color::ColorMode;
 use super::dither::{plan_for, Plan};
-use super::worker::Snapshot;
 use crate::io::output::display_rgb;
+use crate::session::Snapshot;
 use crate::settings::Tonemap;
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
@@ -254,7 +254,7 @@ mod tests {
     use super::*;
     use crate::render::film::ErrorEstimate;
     use crate::render::RenderStats;
-    use crate::tui::worker::JobStatus;
+    use crate::session::JobStatus;
 
     fn snapshot(w: u32, h: u32, f: impl Fn(u32, u32) -> [f32; 3]) -> Snapshot {
         let mut rgb = Vec::new();

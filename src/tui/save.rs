@@ -6,8 +6,8 @@
 //! render the film exactly.
 
 use super::event::Event;
-use super::worker::Snapshot;
 use crate::io::output;
+use crate::session::Snapshot;
 use crate::settings::Tonemap;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::Sender;

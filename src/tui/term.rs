@@ -13,11 +13,11 @@ use crossterm::terminal::{
 use ratatui::backend::CrosstermBackend;
 use std::io::{self, BufWriter, Stdout, Write};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::thread::ThreadId;
 
-/// The last panic seen on a thread other than the UI's: message and location.
-static LAST_PANIC: Mutex<Option<String>> = Mutex::new(None);
+pub use crate::session::panics::panic_message;
+use crate::session::panics::{payload_text, record};
 
 /// Stdout behind a large buffer (one write per frame) that counts the bytes sent.
 pub struct CountingWriter {
@@ -94,29 +94,7 @@ fn install_panic_hook(ui: ThreadId) {
                 .location()
                 .map(|l| format!(" at {}:{}", l.file(), l.line()))
                 .unwrap_or_default();
-            let msg = format!("{}{at}", payload_text(info.payload()));
-            if let Ok(mut last) = LAST_PANIC.lock() {
-                *last = Some(msg);
-            }
+            record(format!("{}{at}", payload_text(info.payload())));
         }
     }));
-}
-
-fn payload_text(payload: &(dyn std::any::Any + Send)) -> String {
-    if let Some(s) = payload.downcast_ref::<&str>() {
-        s.to_string()
-    } else if let Some(s) = payload.downcast_ref::<String>() {
-        s.clone()
-    } else {
-        "unknown panic".into()
-    }
-}
-
-/// The message of a caught panic, with its location if the hook recorded one.
-pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
-    LAST_PANIC
-        .lock()
-        .ok()
-        .and_then(|mut last| last.take())
-        .unwrap_or_else(|| payload_text(payload))
 }

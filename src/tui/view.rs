@@ -12,7 +12,8 @@
 
 use super::app::{App, Message};
 use super::form::{Field, Shown};
-use super::worker::{JobStatus, Snapshot};
+use super::layout::{layout, MIN_HEIGHT, MIN_WIDTH};
+use crate::session::{JobStatus, Snapshot};
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style, Stylize};
 use ratatui::symbols::Marker;
@@ -22,58 +23,12 @@ use ratatui::widgets::{
 };
 use ratatui::Frame;
 
-/// Smallest terminal the layout works in.
-pub const MIN_WIDTH: u16 = 40;
-pub const MIN_HEIGHT: u16 = 12;
-
 /// Width of the form's labels.
 const LABEL: usize = 11;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Areas {
-    pub title: Rect,
-    pub form: Rect,
-    /// None when the terminal is below the minimum size.
-    pub preview: Option<Rect>,
-    pub chart: Option<Rect>,
-    pub gauge: Rect,
-    pub status: Rect,
-}
-
-/// Where everything goes in a terminal of size `area`.
-pub fn layout(area: Rect, app: &App) -> Areas {
-    let [title, body, gauge, status] = Layout::vertical([
-        Constraint::Length(1),
-        Constraint::Min(1),
-        Constraint::Length(1),
-        Constraint::Length(2),
-    ])
-    .areas(area);
-    // At least 22 columns: a 10-column label, a space, and a value as long as `painterly`.
-    let form_w = (area.width / 3).clamp(22, 30);
-    let [form, right] =
-        Layout::horizontal([Constraint::Length(form_w), Constraint::Min(1)]).areas(body);
-    let (preview, chart) = if app.show_chart {
-        let [p, c] =
-            Layout::vertical([Constraint::Percentage(60), Constraint::Percentage(40)]).areas(right);
-        (p, Some(c))
-    } else {
-        (right, None)
-    };
-    let big_enough = area.width >= MIN_WIDTH && area.height >= MIN_HEIGHT;
-    Areas {
-        title,
-        form,
-        preview: big_enough.then_some(preview),
-        chart: chart.filter(|_| big_enough),
-        gauge,
-        status,
-    }
-}
-
 pub fn draw(frame: &mut Frame, app: &App) {
     let area = frame.area();
-    let areas = layout(area, app);
+    let areas = layout(area, app.show_chart);
     let Some(preview) = areas.preview else {
         let text = format!(
             "Terminal too small: {}x{}.\nptui needs at least {MIN_WIDTH}x{MIN_HEIGHT}.\nq quits.",
@@ -679,9 +634,9 @@ mod tests {
     use super::*;
     use crate::render::film::{ErrorEstimate, MeanImage};
     use crate::render::RenderStats;
+    use crate::session::{BuildNotes, SessionEvent, Snapshot};
     use crate::settings::SettingsOverrides;
     use crate::tui::color::{ColorChoice, ColorMode};
-    use crate::tui::worker::{BuildNotes, Snapshot, WorkerEvent};
     use ratatui::backend::TestBackend;
     use ratatui::Terminal;
     use std::sync::Arc;
@@ -720,7 +675,7 @@ mod tests {
             true,
         );
         app.threads = 2;
-        app.on_worker(WorkerEvent::Started {
+        app.on_worker(SessionEvent::Started {
             request: 0,
             job: 1,
             restarted: true,
@@ -760,7 +715,7 @@ mod tests {
             samples_per_pass: 1.0,
             status: JobStatus::Running,
         };
-        app.on_worker(WorkerEvent::Progress(Arc::new(snap)));
+        app.on_worker(SessionEvent::Progress(Arc::new(snap)));
         app.resize(w, h);
         app
     }
@@ -951,7 +906,7 @@ mod tests {
         // 64x48 film (4:3) in the 80x24 layout: count the cells holding image.
         let app = app(80, 24);
         let t = render(&app);
-        let area = layout(app.size, &app).preview.unwrap();
+        let area = layout(app.size, app.show_chart).preview.unwrap();
         let buf = t.backend().buffer();
         let (mut cols, mut rows) = (0, 0);
         for y in area.top()..area.bottom() {

@@ -20,10 +20,10 @@
 pub mod extreme;
 
 use crate::analysis::stats;
+use crate::checked::{de_count, de_dimension, Rgb};
 use crate::render::film::Film;
 use crate::render::{build_pool, RenderError, Renderer};
 use crate::sampling::SamplerKind;
-use crate::checked::{de_count, de_dimension, Rgb};
 use crate::scene::{self, builtin, SceneError};
 use crate::settings::{RenderSettings, SettingsOverrides};
 use serde::de::{self, Deserializer};

@@ -1,15 +1,16 @@
-//! The render worker: one thread that owns the scene, the [`Renderer`] (and with it the film)
-//! and a dedicated rayon pool whose threads run at a lower priority (nice) than the UI.
+//! A render session: one worker thread that owns the scene, the [`Renderer`] (and with it the
+//! film) and a dedicated rayon pool whose threads run at a lower priority (nice) than the UI.
 //!
-//! The UI talks to it through a command channel plus a shared cancel flag, and hears back on the
-//! UI's one event channel: [`WorkerEvent::Started`] when a request is accepted and throttled
+//! Its driver (the TUI) talks to it through a command channel plus a shared cancel flag, and
+//! hears back through a [`Sink`] it maps into its own events: [`SessionEvent::Started`] when a request is accepted and throttled
 //! [`Snapshot`]s (the film's counters and error estimate, and its mean image shared by `Arc`:
 //! relaxed atomics, not a copy), so the UI never waits on a lock the render threads hold. The
 //! newest request wins: sending one raises the cancel flag, the running pass stops within a row,
 //! its threads are joined (`install` returns only when every task has), and the worker takes the
 //! newest command.
 
-use super::event::Event;
+pub mod panics;
+
 use crate::io::film_file::{self, FilmHeader};
 use crate::render::film::{ErrorEstimate, MeanImage};
 use crate::render::{PassOutcome, RenderError, RenderStats, Renderer};
@@ -26,12 +27,13 @@ use std::time::{Duration, Instant};
 const RENDER_NICE: i32 = 10;
 
 /// What to render: a scene (file or built-in name) and the settings layers above the scene's
-/// own `[render]` table (CLI flags, then the TUI form).
+/// own `[render]` table (see [`RenderSettings::resolve`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Request {
     pub id: u64,
     pub scene: String,
-    pub layers: Vec<SettingsOverrides>,
+    pub cli: SettingsOverrides,
+    pub form: SettingsOverrides,
     /// Start a new film even if the current one could go on.
     pub fresh: bool,
 }
@@ -78,7 +80,7 @@ pub struct Snapshot {
 // A few hundred bytes per event, a few events per second: boxing would buy nothing.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
-pub enum WorkerEvent {
+pub enum SessionEvent {
     /// A request was accepted; `restarted` says whether a new film was started (or the current
     /// one goes on, e.g. after raising the target spp).
     Started {
@@ -99,7 +101,12 @@ pub enum WorkerEvent {
     },
     /// A render thread panicked; the render is dropped and the worker waits for a new request.
     Panicked(String),
+    /// A film save (`Command::SaveFilm`) finished: the path written, or what went wrong.
+    FilmSaved(Result<std::path::PathBuf, String>),
 }
+
+/// Where the session's events go: the driver maps them into its own (the TUI's event channel).
+pub type Sink = Box<dyn Fn(SessionEvent) + Send>;
 
 /// What the scene build and the renderer chose, in full (the details view) and as one short
 /// phrase (the status line).
@@ -142,16 +149,16 @@ impl BuildNotes {
 }
 
 /// The UI's end of the worker.
-pub struct WorkerHandle {
+pub struct SessionHandle {
     tx: Sender<Command>,
     cancel: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
 }
 
-impl WorkerHandle {
+impl SessionHandle {
     /// Start the worker thread; it sends snapshots at most every `min_interval` (plus one on
     /// every status change).
-    pub fn spawn(events: Sender<Event>, min_interval: Duration) -> std::io::Result<Self> {
+    pub fn spawn(events: Sink, min_interval: Duration) -> std::io::Result<Self> {
         let (tx, rx) = mpsc::channel();
         let cancel = Arc::new(AtomicBool::new(false));
         let worker = Worker {
@@ -167,7 +174,7 @@ impl WorkerHandle {
         let thread = std::thread::Builder::new()
             .name("ptui-worker".into())
             .spawn(move || worker.run())?;
-        Ok(WorkerHandle {
+        Ok(SessionHandle {
             tx,
             cancel,
             thread: Some(thread),
@@ -205,7 +212,7 @@ struct Job {
 }
 
 struct Worker {
-    events: Sender<Event>,
+    events: Sink,
     rx: Receiver<Command>,
     cancel: Arc<AtomicBool>,
     min_interval: Duration,
@@ -279,15 +286,15 @@ impl Worker {
             Ok(go_on) => go_on,
             Err(payload) => {
                 self.job = None;
-                let msg = super::term::panic_message(&*payload);
-                let _ = self.events.send(Event::Render(WorkerEvent::Panicked(msg)));
+                let msg = panics::panic_message(&*payload);
+                (self.events)(SessionEvent::Panicked(msg));
                 true
             }
         }
     }
 
-    fn send(&self, ev: WorkerEvent) {
-        let _ = self.events.send(Event::Render(ev));
+    fn send(&self, ev: SessionEvent) {
+        (self.events)(ev);
     }
 
     /// Apply one command; false means quit.
@@ -309,17 +316,17 @@ impl Worker {
             }
             Command::SaveFilm(path) => {
                 let result = self.save_film(&path).map(|()| path);
-                let _ = self.events.send(Event::Saved(result));
+                self.send(SessionEvent::FilmSaved(result));
             }
             Command::Resume(path) => {
                 if let Err(e) = self.resume_film(&path) {
                     let msg = format!("cannot continue {}: {e}", path.display());
-                    self.send(WorkerEvent::Panicked(msg));
+                    self.send(SessionEvent::Panicked(msg));
                 }
             }
             Command::Start(req) => {
                 if let Err(message) = self.start(&req) {
-                    self.send(WorkerEvent::Failed {
+                    self.send(SessionEvent::Failed {
                         request: req.id,
                         message,
                     });
@@ -340,9 +347,7 @@ impl Worker {
                 s
             }
         };
-        let mut layers: Vec<&SettingsOverrides> = vec![&scene.render];
-        layers.extend(req.layers.iter());
-        let settings = RenderSettings::merged(&layers);
+        let settings = RenderSettings::resolve(&scene.render, &req.cli, Some(&req.form));
         settings.validate()?;
 
         let continues = !req.fresh
@@ -378,7 +383,7 @@ impl Worker {
             self.next_job += 1;
         }
         let job = self.job.as_ref().expect("set above");
-        self.send(WorkerEvent::Started {
+        self.send(SessionEvent::Started {
             request: req.id,
             job: job.id,
             restarted,
@@ -516,7 +521,7 @@ impl Worker {
             samples_per_pass: job.renderer.sample_map().map_or(1.0, |m| m.mean()),
             status: job.status,
         };
-        self.send(WorkerEvent::Progress(Arc::new(snap)));
+        self.send(SessionEvent::Progress(Arc::new(snap)));
     }
 }
 
@@ -538,28 +543,36 @@ mod tests {
     use super::*;
     use crate::settings::IntegratorKind;
 
+    /// A sink that forwards to a channel the test reads.
+    fn sink(tx: Sender<SessionEvent>) -> Sink {
+        Box::new(move |e| {
+            let _ = tx.send(e);
+        })
+    }
+
     fn request(id: u64, spp: u32, integrator: IntegratorKind) -> Request {
         Request {
             id,
             scene: "cornell".into(),
-            layers: vec![SettingsOverrides {
+            form: SettingsOverrides::default(),
+            cli: SettingsOverrides {
                 width: Some(16),
                 height: Some(12),
                 spp: Some(spp),
                 integrator: Some(integrator),
                 threads: Some(1),
                 ..Default::default()
-            }],
+            },
             fresh: false,
         }
     }
 
     /// Wait for the next snapshot with the given status (the worker's events come in order).
-    fn until(rx: &Receiver<Event>, want: JobStatus) -> Arc<Snapshot> {
+    fn until(rx: &Receiver<SessionEvent>, want: JobStatus) -> Arc<Snapshot> {
         loop {
             match rx.recv_timeout(Duration::from_secs(120)) {
-                Ok(Event::Render(WorkerEvent::Progress(s))) if s.status == want => return s,
-                Ok(Event::Render(WorkerEvent::Failed { message, .. })) => panic!("{message}"),
+                Ok(SessionEvent::Progress(s)) if s.status == want => return s,
+                Ok(SessionEvent::Failed { message, .. }) => panic!("{message}"),
                 Ok(_) => {}
                 Err(e) => panic!("no {want:?} snapshot: {e}"),
             }
@@ -569,7 +582,7 @@ mod tests {
     #[test]
     fn raising_spp_continues_and_a_new_integrator_restarts() {
         let (tx, rx) = mpsc::channel();
-        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
         worker.send(Command::Start(request(1, 2, IntegratorKind::Path)));
         let first = until(&rx, JobStatus::Done);
         assert_eq!(first.stats.complete_passes, 2);
@@ -586,7 +599,7 @@ mod tests {
     #[test]
     fn a_painterly_knob_or_the_sampler_restarts_the_render() {
         let (tx, rx) = mpsc::channel();
-        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
         worker.send(Command::Start(request(1, 2, IntegratorKind::Painterly)));
         let first = until(&rx, JobStatus::Done);
         // More samples go on with the same film...
@@ -605,7 +618,7 @@ mod tests {
         ];
         for (i, change) in changes.iter().enumerate() {
             more.id = 3 + i as u64;
-            change(&mut more.layers[0]);
+            change(&mut more.cli);
             worker.send(Command::Start(more.clone()));
             let new = until(&rx, JobStatus::Done);
             assert!(
@@ -622,11 +635,11 @@ mod tests {
     #[test]
     fn a_new_request_cancels_a_long_render() {
         let (tx, rx) = mpsc::channel();
-        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
         // 64x48 at a million spp would take hours: only cancelling lets the next one run.
         let mut long = request(1, 1_000_000, IntegratorKind::Path);
-        long.layers[0].width = Some(64);
-        long.layers[0].height = Some(48);
+        long.cli.width = Some(64);
+        long.cli.height = Some(48);
         worker.send(Command::Start(long));
         let first = until(&rx, JobStatus::Running);
         worker.send(Command::Start(request(2, 2, IntegratorKind::Naive)));
@@ -639,12 +652,12 @@ mod tests {
     #[test]
     fn a_bad_scene_fails_the_request_only() {
         let (tx, rx) = mpsc::channel();
-        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
         let mut req = request(7, 1, IntegratorKind::Path);
         req.scene = "no-such-scene".into();
         worker.send(Command::Start(req));
         match rx.recv_timeout(Duration::from_secs(60)) {
-            Ok(Event::Render(WorkerEvent::Failed { request, message })) => {
+            Ok(SessionEvent::Failed { request, message }) => {
                 assert_eq!(request, 7);
                 assert!(message.contains("no-such-scene"), "{message}");
             }
@@ -656,10 +669,10 @@ mod tests {
     #[test]
     fn target_error_stops_the_render() {
         let (tx, rx) = mpsc::channel();
-        let worker = WorkerHandle::spawn(tx, Duration::ZERO).unwrap();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
         let mut req = request(1, 1000, IntegratorKind::Path);
         // A relative error of 0.5 is reached within a few passes on 16x12 pixels.
-        req.layers[0].target_error = Some(0.5);
+        req.cli.target_error = Some(0.5);
         worker.send(Command::Start(req));
         let snap = until(&rx, JobStatus::TargetReached);
         assert!(snap.error.relative() <= 0.5, "{:?}", snap.error);
@@ -672,7 +685,7 @@ mod tests {
         let (tx, rx) = mpsc::channel();
         let (_cmd_tx, cmd_rx) = mpsc::channel();
         let mut worker = Worker {
-            events: tx,
+            events: sink(tx),
             rx: cmd_rx,
             cancel: Arc::new(AtomicBool::new(false)),
             min_interval: Duration::ZERO,
@@ -684,7 +697,7 @@ mod tests {
         let go_on = worker.guarded(|_| panic!("boom in a render thread"));
         assert!(go_on);
         match rx.try_recv() {
-            Ok(Event::Render(WorkerEvent::Panicked(msg))) => assert!(msg.contains("boom"), "{msg}"),
+            Ok(SessionEvent::Panicked(msg)) => assert!(msg.contains("boom"), "{msg}"),
             other => panic!("expected a panic report, got {other:?}"),
         }
     }
