@@ -200,6 +200,12 @@ pub struct SettingsArgs {
     /// per pass (unbiased; default true). --spp then counts passes.
     #[arg(long, value_name = "BOOL", action = clap::ArgAction::Set)]
     pub adaptive: Option<bool>,
+    /// Lens radius in scene units (0: pinhole), replacing the scene's `[camera] aperture`.
+    #[arg(long, value_name = "R", value_parser = parse_non_negative, help_heading = "Camera")]
+    pub aperture: Option<f64>,
+    /// Distance of the plane in focus along the view, replacing the scene's.
+    #[arg(long, value_name = "F", value_parser = parse_positive, help_heading = "Camera")]
+    pub focus_distance: Option<f64>,
 }
 
 impl SettingsArgs {
@@ -225,6 +231,8 @@ impl SettingsArgs {
             },
             target_error: self.target_error,
             adaptive: self.adaptive,
+            aperture: self.aperture,
+            focus_distance: self.focus_distance,
         }
     }
 }
@@ -266,6 +274,15 @@ pub fn parse_duration(s: &str) -> Result<std::time::Duration, String> {
         return Err(format!("the duration must be positive, got `{s}`"));
     }
     std::time::Duration::try_from_secs_f64(v * scale).map_err(|e| format!("`{s}`: {e}"))
+}
+
+pub fn parse_non_negative(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|_| format!("`{s}` is not a number"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number >= 0, got {s}"))
+    }
 }
 
 pub fn parse_positive(s: &str) -> Result<f64, String> {

@@ -141,6 +141,11 @@ pub struct FilmHeader {
     pub adaptive: bool,
     /// The painterly integrator's parameters as `ptui render` prints them.
     pub painterly: String,
+    /// The lens, where the CLI or the TUI changed the scene's (absent: the scene's camera).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aperture: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_distance: Option<f64>,
     /// Output settings: not part of the film's data, used when a merge or resume saves an image.
     pub exposure: f64,
     pub tonemap: Tonemap,
@@ -165,6 +170,11 @@ pub struct FilmHeader {
     pub stats: FilmStats,
 }
 
+/// A lens setting as the identity compares it: "scene" where the scene's camera holds.
+fn lens_text(v: Option<f64>) -> String {
+    v.map_or_else(|| "scene".into(), |v| v.to_string())
+}
+
 impl FilmHeader {
     /// A header for a render of `scene` (its spec and hash) with `settings`.
     pub fn new(scene: &str, scene_hash: &str, settings: &RenderSettings) -> Self {
@@ -182,6 +192,8 @@ impl FilmHeader {
             max_depth: settings.max_depth,
             adaptive: settings.adaptive,
             painterly: settings.painterly.to_string(),
+            aperture: settings.aperture,
+            focus_distance: settings.focus_distance,
             exposure: settings.exposure,
             tonemap: settings.tonemap,
             passes: Vec::new(),
@@ -213,6 +225,8 @@ impl FilmHeader {
             ),
             ("adaptive", self.adaptive.to_string()),
             ("painterly", self.painterly.clone()),
+            ("aperture", lens_text(self.aperture)),
+            ("focus_distance", lens_text(self.focus_distance)),
         ]
     }
 
@@ -319,6 +333,8 @@ impl FilmHeader {
             exposure: Some(self.exposure),
             tonemap: Some(self.tonemap),
             adaptive: Some(self.adaptive),
+            aperture: self.aperture,
+            focus_distance: self.focus_distance,
             ..Default::default()
         }
     }

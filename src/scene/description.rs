@@ -69,6 +69,10 @@ pub struct CameraDesc {
     pub up: Option<Spanned<Dir>>,
     pub vfov: Option<Fov>,
     pub near: Option<NonNegative>,
+    /// Lens radius (0, the default: a pinhole); see `camera`.
+    pub aperture: Option<NonNegative>,
+    pub focus_distance: Option<Spanned<Positive>>,
+    pub focus_on: Option<Spanned<V3>>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]

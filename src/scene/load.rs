@@ -12,7 +12,7 @@ use crate::geometry::{Primitive, Shape};
 use crate::geometry::{Sphere, Triangle};
 use crate::light::{sphere::SphereLight, triangle::TriangleLight, Light, Lights};
 use crate::material::{Material, MaterialKind};
-use crate::math::DVec3;
+use crate::math::{DVec3, Ray};
 use crate::settings::RenderSettings;
 use std::collections::HashSet;
 use std::ops::Range;
@@ -270,6 +270,7 @@ fn build(
     let nx = ((32 * size.width) / size.height.max(1)).clamp(1, 128);
     let probe = camera_probe(&camera, nx, 32);
     let (accel, why) = Accel::build(choice, &prims, &probe);
+    let camera = focus_camera(camera, desc, &accel, &prims, src, file)?;
     let lights = Lights::new(clip_sphere_lights(lights, &prims));
     let mut light_sampling = match lights.len() {
         0 => "off (no emitters)".to_string(),
@@ -458,6 +459,67 @@ fn build_camera(desc: &SceneDesc, src: &str, file: &str) -> Result<Camera, Scene
     let vfov = c.vfov.map_or(DEFAULT_VFOV, |f| f.0);
     let near = c.near.map_or(0.0, |n| n.0);
     Ok(Camera::new(position, forward, up, vfov, near))
+}
+
+/// The camera with its lens: `aperture`, and the focus plane at `focus_distance`, through
+/// `focus_on`, or by default at the first surface the centre ray hits (the scene's centre if it
+/// hits nothing), so a lens without a focus setting is sharp where the camera looks.
+fn focus_camera(
+    camera: Camera,
+    desc: &SceneDesc,
+    accel: &Accel,
+    prims: &[Primitive],
+    src: &str,
+    file: &str,
+) -> Result<Camera, SceneError> {
+    let c = &desc.camera;
+    let aperture = c.aperture.map_or(0.0, |a| a.0);
+    let focus = match (&c.focus_distance, &c.focus_on) {
+        (Some(_), Some(on)) => {
+            return Err(SceneError::at(
+                file,
+                src,
+                Some(on.span()),
+                Some("camera.focus_on".into()),
+                "give either `focus_distance` or `focus_on`, not both",
+            ))
+        }
+        (Some(f), None) => f.get_ref().0,
+        (None, Some(on)) => {
+            let z = (DVec3::from_array(on.get_ref().0) - camera.position).dot(camera.forward);
+            if !(z > 0.0) {
+                return Err(SceneError::at(
+                    file,
+                    src,
+                    Some(on.span()),
+                    Some("camera.focus_on".into()),
+                    format!("the point is not in front of the camera (distance {z:e} along the view)"),
+                ));
+            }
+            z
+        }
+        (None, None) => default_focus(&camera, accel, prims),
+    };
+    Ok(camera.with_lens(aperture, focus))
+}
+
+/// Distance along the view to the first surface the centre ray hits (from `near` on); the scene's centre if it
+/// hits nothing in front of the camera; 1 for an empty scene.
+pub fn default_focus(camera: &Camera, accel: &Accel, prims: &[Primitive]) -> f64 {
+    // The centre ray starts `near` along the view like every camera ray (smallpt's starts
+    // past its front wall).
+    let ray = Ray::new(camera.position + camera.forward * camera.near, camera.forward);
+    if let Some(hit) = accel.intersect(prims, &ray, f64::INFINITY) {
+        return camera.near + hit.t;
+    }
+    let bounds = prims
+        .iter()
+        .map(|p| p.shape.bounds())
+        .reduce(|a, b| a.union(b));
+    bounds
+        .map(|b| (b.centroid() - camera.position).dot(camera.forward))
+        .filter(|z| *z > 0.0 && z.is_finite())
+        .unwrap_or(1.0)
 }
 
 /// How many of the lights emit from one face, from both, and outwards (spheres), for the summary.

@@ -122,6 +122,10 @@ pub struct RenderSettings {
     /// After a pilot of uniform passes, give noisy pixels more samples per pass (see
     /// `adaptive`); `spp` then counts passes, each at least one sample of every pixel.
     pub adaptive: bool,
+    /// Lens radius replacing the scene camera's `aperture` (CLI, TUI form); None: the scene's.
+    pub aperture: Option<f64>,
+    /// Focus distance replacing the scene camera's; None: the scene's.
+    pub focus_distance: Option<f64>,
 }
 
 impl Default for RenderSettings {
@@ -141,6 +145,8 @@ impl Default for RenderSettings {
             painterly: PainterlyParams::default(),
             target_error: None,
             adaptive: true,
+            aperture: None,
+            focus_distance: None,
         }
     }
 }
@@ -176,6 +182,12 @@ pub struct SettingsOverrides {
     #[serde(default, deserialize_with = "crate::checked::de_positive_opt")]
     pub target_error: Option<f64>,
     pub adaptive: Option<bool>,
+    /// The lens is the scene's `[camera]`; these layers (CLI, TUI form) may change it, but a
+    /// `[render]` table may not say it a second time.
+    #[serde(skip)]
+    pub aperture: Option<f64>,
+    #[serde(skip)]
+    pub focus_distance: Option<f64>,
 }
 
 impl RenderSettings {
@@ -194,6 +206,12 @@ impl RenderSettings {
         self.painterly.apply(&o.painterly);
         if let Some(e) = o.target_error {
             self.target_error = Some(e);
+        }
+        if let Some(a) = o.aperture {
+            self.aperture = Some(a);
+        }
+        if let Some(f) = o.focus_distance {
+            self.focus_distance = Some(f);
         }
     }
 
@@ -247,6 +265,18 @@ impl RenderSettings {
             ));
         }
         self.painterly.validate()?;
+        if let Some(a) = self.aperture {
+            if !(a.is_finite() && (0.0..=MAX).contains(&a)) {
+                return Err(format!("aperture must be a number between 0 and {MAX:e}, got {a}"));
+            }
+        }
+        if let Some(f) = self.focus_distance {
+            if !(MIN..=MAX).contains(&f) {
+                return Err(format!(
+                    "focus distance must be a number between {MIN:e} and {MAX:e}, got {f}"
+                ));
+            }
+        }
         if let Some(e) = self.target_error {
             if !(e.is_finite() && e > 0.0) {
                 return Err(format!("target_error must be a finite number > 0, got {e}"));
