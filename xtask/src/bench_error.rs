@@ -205,23 +205,10 @@ pub fn smallpt_ratios(rounds: &[Round]) -> String {
         summary(&speeds, 3, "").1,
         summary(&rmses, 5, "").1,
     );
-    // The same series in every round, found by scene and label.
-    let across = |r: &ErrorRow, value: &dyn Fn(&ErrorRow, (f64, f64)) -> Option<f64>| {
-        rounds
-            .iter()
-            .zip(&smallpt)
-            .filter_map(|(round, &base)| {
-                let same = round
-                    .bench
-                    .rows
-                    .iter()
-                    .find(|o| o.scene == r.scene && o.series.label() == r.series.label())?;
-                value(same, base)
-            })
-            .collect::<Vec<f64>>()
-    };
     for r in &first.bench.rows {
-        let ratios = across(r, &|row, (speed, _)| Some(row.paths_per_second / speed));
+        let ratios = across(rounds, &smallpt, r, |row, (speed, _)| {
+            Some(row.paths_per_second / speed)
+        });
         let _ = writeln!(
             out,
             "{} {} paths/s: {} smallpt's",
@@ -231,7 +218,7 @@ pub fn smallpt_ratios(rounds: &[Round]) -> String {
         );
     }
     for r in first.bench.rows.iter().filter(|r| r.rmse.is_some()) {
-        let ratios = across(r, &|row, (_, rmse)| Some(row.rmse? / rmse));
+        let ratios = across(rounds, &smallpt, r, |row, (_, rmse)| Some(row.rmse? / rmse));
         let _ = writeln!(
             out,
             "{} {} RMSE at {seconds} s: {} smallpt's",
@@ -262,6 +249,28 @@ pub fn smallpt_ratios(rounds: &[Round]) -> String {
     }
     let _ = writeln!(out, "targets: the table in benches/README.md");
     out
+}
+
+/// `value` of the series `r` (found by scene and label) in every round, given that round's
+/// smallpt (paths/s, RMSE); rounds without the series are left out.
+fn across(
+    rounds: &[Round],
+    smallpt: &[(f64, f64)],
+    r: &ErrorRow,
+    value: impl Fn(&ErrorRow, (f64, f64)) -> Option<f64>,
+) -> Vec<f64> {
+    rounds
+        .iter()
+        .zip(smallpt)
+        .filter_map(|(round, &base)| {
+            let same = round
+                .bench
+                .rows
+                .iter()
+                .find(|o| o.scene == r.scene && o.series.label() == r.series.label())?;
+            value(same, base)
+        })
+        .collect()
 }
 
 /// Render every combination of [`PLAN`] for `seconds` each, calling `on_row` as each finishes.
