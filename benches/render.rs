@@ -1,7 +1,7 @@
 //! Paths per second of one render pass (`cargo bench --bench render`): cornell and
 //! cornell-small-light at 64x48, path and naive, the scenes' sampler, 2 threads. One iteration is
 //! one pass (one path per pixel) on a fresh film, so the throughput is in paths (pixels).
-//! `ptui bench scenes` and `ptui bench error` give the full-size numbers and rays/s.
+//! `ptui bench scenes` and `cargo xtask bench-error` give the full-size numbers and rays/s.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use ptui::render::{build_pool, Renderer};

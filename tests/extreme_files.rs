@@ -2,7 +2,7 @@
 //! embeds: no scene can drift from its transformation or be left out of the checks.
 
 #[allow(dead_code)]
-#[path = "../examples/gen_extreme.rs"]
+#[path = "../xtask/src/gen_extreme.rs"]
 mod gen_extreme;
 
 use std::path::Path;
@@ -19,7 +19,7 @@ fn generated_scenes_are_up_to_date() {
             std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         assert!(
             on_disk == text,
-            "{} is stale: run `cargo run --example gen_extreme`",
+            "{} is stale: run `cargo xtask gen-extreme`",
             path.display()
         );
     }

@@ -1,6 +1,7 @@
 // smallpt, a path tracer by Kevin Beason, 2008 (http://www.kevinbeason.com/smallpt/, MIT
 // licence), unchanged above main(): the baseline the performance issue measures ptui against.
-// Build and run side by side with ptui (see README, Performance):
+// Build and run side by side with ptui (see benches/README.md; `cargo xtask bench-error
+// --smallpt target/smallpt` runs it):
 //   g++ -O3 -fopenmp benches/smallpt/smallpt.cpp -o target/smallpt && target/smallpt 10 out.pfm
 #include <math.h>
 #include <stdlib.h>

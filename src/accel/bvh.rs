@@ -1,6 +1,6 @@
 //! Bounding volume hierarchy: binned SAH build (Wald 2007, pbrt-v4's `BVHAggregate` with
-//! buckets) into one flat, depth-first node array; ordered closest-hit traversal and an any-hit
-//! traversal with a fixed-size stack.
+//! buckets) into one flat, depth-first node array; one traversal with a fixed-size stack, which
+//! the closest-hit and any-hit queries (and the cost probe) call with their own leaf test.
 //!
 //! Results are exactly those of the flat scan ([`super::flat`]): the same shapes are tested with
 //! the same arithmetic, box tests are conservative (boxes padded, slab distances widened by their
@@ -11,6 +11,7 @@ use crate::geometry::triangle::gamma;
 use crate::geometry::{Aabb, Hit};
 use crate::geometry::{Primitive, Shape};
 use crate::math::{DVec3, Ray};
+use std::ops::Range;
 use std::time::{Duration, Instant};
 
 /// SAH buckets per split (pbrt uses 12; more buy little).
@@ -123,42 +124,15 @@ impl Bvh {
         }
         let (mut boxes, mut tests) = (0u64, 0u64);
         for ray in rays {
-            let inv = ray.d.recip();
-            let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
-            let mut best = f64::INFINITY;
-            let mut stack = [0u32; STACK];
-            let mut sp = 0usize;
-            let mut node = 0usize;
-            while !self.nodes.is_empty() {
-                let n = &self.nodes[node];
-                boxes += 1;
-                if hit_box(&n.bounds(), ray.o, inv, best) {
-                    if n.count > 0 {
-                        let range = n.offset as usize..(n.offset + n.count) as usize;
-                        for shape in &self.shapes[range] {
-                            tests += 1;
-                            if let Some(t) = shape.intersect(ray, best) {
-                                best = t;
-                            }
-                        }
-                    } else {
-                        let (first, second) = if neg[n.axis as usize] {
-                            (n.offset as usize, node + 1)
-                        } else {
-                            (node + 1, n.offset as usize)
-                        };
-                        stack[sp] = second as u32;
-                        sp += 1;
-                        node = first;
-                        continue;
+            boxes += self.traverse::<true>(ray, f64::INFINITY, |range, best| {
+                for shape in &self.shapes[range] {
+                    tests += 1;
+                    if let Some(t) = shape.intersect(ray, *best) {
+                        *best = t;
                     }
                 }
-                if sp == 0 {
-                    break;
-                }
-                sp -= 1;
-                node = stack[sp] as usize;
-            }
+                false
+            });
         }
         (boxes as f64 * TRAVERSAL_COST + tests as f64) / rays.len() as f64
     }
@@ -166,33 +140,74 @@ impl Bvh {
     /// Closest hit in (0, t_max).
     #[inline]
     pub fn intersect(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<Hit> {
+        let mut best = t_max;
+        let mut best_index = u32::MAX;
+        self.traverse::<true>(ray, t_max, |range, bound| {
+            for (&i, shape) in self.order[range.clone()].iter().zip(&self.shapes[range]) {
+                // Allow t == bound so an equal-distance hit of a lower index wins.
+                if let Some(t) = shape.intersect(ray, bound.next_up()) {
+                    let found = best_index != u32::MAX;
+                    if t < *bound || (found && t == *bound && i < best_index) {
+                        *bound = t;
+                        best = t;
+                        best_index = i;
+                    }
+                }
+            }
+            false
+        });
+        (best_index != u32::MAX)
+            .then(|| prims[best_index as usize].shape.hit(ray, best, best_index))
+    }
+
+    /// Whether anything is hit in (0, t_max); stops at the first hit found.
+    #[inline]
+    pub fn any_hit(&self, ray: &Ray, t_max: f64) -> bool {
+        let mut hit = false;
+        self.traverse::<false>(ray, t_max, |range, _| {
+            hit = self.shapes[range]
+                .iter()
+                .any(|s| s.intersect(ray, t_max).is_some());
+            hit
+        });
+        hit
+    }
+
+    /// The one traversal behind every query: a depth-first walk with a fixed-size stack over
+    /// the nodes whose boxes the ray meets within the bound (t_max to start with). Each leaf's
+    /// range of `order`/`shapes` goes to `leaf`, which may lower the bound (closest hit) and
+    /// returns true to end the walk (any hit). `ORDERED` visits the child on the ray's near side
+    /// of the split first (closest hit: the bound falls sooner); unordered, the first child
+    /// first. Returns the number of boxes tested (for [`Self::probe_cost`]; unused, it compiles
+    /// away). Generic over `leaf` so every query gets its own inlined copy of the loop.
+    #[inline(always)]
+    fn traverse<const ORDERED: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        mut leaf: impl FnMut(Range<usize>, &mut f64) -> bool,
+    ) -> u64 {
         if self.nodes.is_empty() {
-            return None;
+            return 0;
         }
         let inv = ray.d.recip();
         let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
-        let mut best = t_max;
-        let mut best_index = u32::MAX;
+        let mut bound = t_max;
+        let mut boxes = 0u64;
         let mut stack = [0u32; STACK];
         let mut sp = 0usize;
         let mut node = 0usize;
         loop {
             let n = &self.nodes[node];
-            if hit_box(&n.bounds(), ray.o, inv, best) {
+            boxes += 1;
+            if hit_box(&n.bounds(), ray.o, inv, bound) {
                 if n.count > 0 {
                     let range = n.offset as usize..(n.offset + n.count) as usize;
-                    for (&i, shape) in self.order[range.clone()].iter().zip(&self.shapes[range]) {
-                        // Allow t == best so an equal-distance hit of a lower index wins.
-                        if let Some(t) = shape.intersect(ray, best.next_up()) {
-                            let found = best_index != u32::MAX;
-                            if t < best || (found && t == best && i < best_index) {
-                                best = t;
-                                best_index = i;
-                            }
-                        }
+                    if leaf(range, &mut bound) {
+                        return boxes;
                     }
                 } else {
-                    let (first, second) = if neg[n.axis as usize] {
+                    let (first, second) = if ORDERED && neg[n.axis as usize] {
                         (n.offset as usize, node + 1)
                     } else {
                         (node + 1, n.offset as usize)
@@ -204,45 +219,7 @@ impl Bvh {
                 }
             }
             if sp == 0 {
-                break;
-            }
-            sp -= 1;
-            node = stack[sp] as usize;
-        }
-        (best_index != u32::MAX)
-            .then(|| prims[best_index as usize].shape.hit(ray, best, best_index))
-    }
-
-    /// Whether anything is hit in (0, t_max); stops at the first hit found.
-    #[inline]
-    pub fn any_hit(&self, ray: &Ray, t_max: f64) -> bool {
-        if self.nodes.is_empty() {
-            return false;
-        }
-        let inv = ray.d.recip();
-        let mut stack = [0u32; STACK];
-        let mut sp = 0usize;
-        let mut node = 0usize;
-        loop {
-            let n = &self.nodes[node];
-            if hit_box(&n.bounds(), ray.o, inv, t_max) {
-                if n.count > 0 {
-                    let range = n.offset as usize..(n.offset + n.count) as usize;
-                    if self.shapes[range]
-                        .iter()
-                        .any(|s| s.intersect(ray, t_max).is_some())
-                    {
-                        return true;
-                    }
-                } else {
-                    stack[sp] = n.offset;
-                    sp += 1;
-                    node += 1;
-                    continue;
-                }
-            }
-            if sp == 0 {
-                return false;
+                return boxes;
             }
             sp -= 1;
             node = stack[sp] as usize;

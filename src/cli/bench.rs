@@ -1,10 +1,7 @@
 //! `ptui bench accel`: the flat scan against the BVH as the primitive count grows, and the
 //! crossover the scene build uses (`accel::BVH_CROSSOVER`). `ptui bench scenes`: paths and rays
-//! per second on every built-in scene, path and naive. `ptui bench error`: equal-time error
-//! ([`error`]).
-
-pub mod error;
-pub mod smallpt;
+//! per second on every built-in scene, path and naive. The project's own benchmarks (equal-time
+//! error against smallpt) are developer tooling: `cargo xtask bench-error`.
 
 use super::{BenchArgs, BenchTarget};
 use crate::accel::{bench, BVH_CROSSOVER};
@@ -14,7 +11,8 @@ use crate::settings::{IntegratorKind, RenderSettings, SettingsOverrides};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-/// Image size and worker threads of `bench scenes` and `bench error` (issue 8's set-up).
+/// Image size and worker threads of `bench scenes` and `cargo xtask bench-error` (issue 8's
+/// set-up).
 pub const WIDTH: u32 = 320;
 pub const HEIGHT: u32 = 240;
 pub const THREADS: usize = 2;
@@ -38,12 +36,6 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             println!("crossover used by the scene build (accel::BVH_CROSSOVER): {BVH_CROSSOVER}");
         }
         BenchTarget::Scenes => scenes(args.spp)?,
-        BenchTarget::Error => error::run(
-            args.seconds,
-            &args.reference,
-            args.smallpt.as_deref(),
-            args.rounds,
-        )?,
     }
     Ok(())
 }

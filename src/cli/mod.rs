@@ -45,7 +45,7 @@ pub enum Command {
     /// scenes/extreme/).
     Check(check::CheckArgs),
     /// Measure parts of the renderer (`accel`: flat scan vs BVH by primitive count; `scenes`:
-    /// paths/s and rays/s; `error`: equal-time error).
+    /// paths/s and rays/s).
     Bench(BenchArgs),
 }
 
@@ -62,25 +62,6 @@ pub struct BenchArgs {
     /// `scenes`: samples per pixel of each render (320x240, 2 threads).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
-    /// `error`: render time per integrator x sampler, scene build excluded.
-    #[arg(long, default_value_t = 10.0, value_parser = parse_positive)]
-    pub seconds: f64,
-    /// `error`: linear reference image of cornell (320x240 EXR).
-    #[arg(
-        long,
-        value_name = "REF.exr",
-        default_value = "../shared/refs/cornell.exr"
-    )]
-    pub reference: PathBuf,
-    /// `error`: also run this build of `benches/smallpt/smallpt.cpp` (before and after ptui's
-    /// series) and print the targets as ratios to it, measured in the same run.
-    #[arg(long, value_name = "BIN")]
-    pub smallpt: Option<PathBuf>,
-    /// `error`: run the whole series this many times, smallpt before each round and after the
-    /// last; each round's ratios use the smallpt runs around it, and the targets report their
-    /// medians (shared machines drift by 10% and more within a run).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
-    pub rounds: u32,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -90,10 +71,6 @@ pub enum BenchTarget {
     /// Paths and rays per second, path and naive, and scene build time of the built-in scenes,
     /// 320x240, 2 threads.
     Scenes,
-    /// Equal-time error, 320x240, 2 threads: RMSE against the reference on cornell for path and
-    /// naive with sobol and independent samples; path vs naive estimated error on
-    /// cornell-small-light; on both, path with caustics = path (NEE + MIS alone) too.
-    Error,
 }
 
 #[derive(Args, Debug)]

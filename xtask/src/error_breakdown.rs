@@ -2,20 +2,15 @@
 //! error carried by the worst pixels, and writes a heat map of the per-pixel squared error.
 //!
 //! ```sh
-//! cargo run --release --example error_breakdown -- render.exr ../shared/refs/cornell.exr heat.png
+//! cargo xtask error-breakdown render.exr ../shared/refs/cornell.exr heat.png
 //! ```
 
 use ptui::analysis::reference;
 use std::path::Path;
 
-fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    anyhow::ensure!(
-        args.len() >= 3,
-        "usage: error_breakdown IMAGE.exr REF.exr [HEAT.png]"
-    );
-    let img = reference::load(Path::new(&args[1]))?;
-    let rf = reference::load(Path::new(&args[2]))?;
+pub fn run(image: &Path, reference: &Path, heat: Option<&Path>) -> anyhow::Result<()> {
+    let img = reference::load(image)?;
+    let rf = reference::load(reference)?;
     anyhow::ensure!(
         img.width == rf.width && img.height == rf.height,
         "sizes differ"
@@ -90,7 +85,7 @@ fn main() -> anyhow::Result<()> {
             100.0 * s / total
         );
     }
-    if let Some(out) = args.get(3) {
+    if let Some(out) = heat {
         let p99 = se[n / 100].0.max(1e-12);
         let mut buf = vec![0u8; n * 3];
         for &(s, i) in &se {

@@ -4,16 +4,16 @@
 //! are what this program writes.
 //!
 //! ```sh
-//! cargo run --release --example gen_extreme                 # rewrite scenes/extreme/
-//! cargo run --release --example gen_extreme -- probe /tmp/p # also write the beyond-the-limit
-//!                                                           # variants used to find where it breaks
+//! cargo xtask gen-extreme                # rewrite scenes/extreme/
+//! cargo xtask gen-extreme --probe /tmp/p # write the beyond-the-limit variants used to find
+//!                                        # where it breaks there instead
 //! ```
 
 use ptui::scene::builtin;
 use ptui::scene::description::{SceneDesc, SphereDesc};
 use ptui::scene::load::parse;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// One sphere, ready to print.
 #[derive(Clone, Debug)]
@@ -91,9 +91,7 @@ impl Gen {
         for line in header.lines() {
             let _ = writeln!(s, "# {line}");
         }
-        s.push_str(
-            "# Written by `cargo run --example gen_extreme`; edit the generator, not this.\n\n",
-        );
+        s.push_str("# Written by `cargo xtask gen-extreme`; edit the generator, not this.\n\n");
         let _ = writeln!(s, "[camera]");
         let _ = writeln!(s, "position = {}", v3(self.position));
         let _ = writeln!(s, "direction = {}", v3(self.direction));
@@ -312,18 +310,12 @@ fn probes() -> Vec<(String, String)> {
     out
 }
 
-#[allow(dead_code)]
-fn main() -> std::io::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let (files, dir) = match args.get(1).map(String::as_str) {
-        Some("probe") => (
-            probes(),
-            args.get(2)
-                .map(Into::into)
-                .unwrap_or_else(|| std::env::temp_dir().join("ptui-probe")),
-        ),
-        _ => (generated(), manifest.join("scenes/extreme")),
+/// Write the generated scenes into `extreme` (scenes/extreme/), or with `probe` the
+/// beyond-the-limit variants into that directory instead.
+pub fn write(probe: Option<PathBuf>, extreme: &Path) -> std::io::Result<()> {
+    let (files, dir) = match probe {
+        Some(dir) => (probes(), dir),
+        None => (generated(), extreme.to_path_buf()),
     };
     std::fs::create_dir_all(&dir)?;
     for (name, text) in files {

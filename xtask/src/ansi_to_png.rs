@@ -4,12 +4,13 @@
 //!
 //! ```sh
 //! tmux capture-pane -p -e -t ptui > /tmp/screen.ans
-//! cargo run --release --example ansi_to_png -- /tmp/screen.ans docs/tui.png [FONT.ttf]
+//! cargo xtask ansi-to-png /tmp/screen.ans docs/tui.png [FONT.ttf]
 //! ```
 
 use ab_glyph::{Font, FontVec, PxScale, ScaleFont};
 use image::{Rgb, RgbImage};
 use ptui::tui::color::ansi256_rgb;
+use std::path::Path;
 
 const CELL_W: u32 = 10;
 const CELL_H: u32 = 20;
@@ -54,15 +55,9 @@ fn fill(img: &mut RgbImage, x: u32, y: u32, w: u32, h: u32, c: [u8; 3]) {
     }
 }
 
-fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    if args.len() < 3 {
-        anyhow::bail!("usage: ansi_to_png CAPTURE.ans OUT.png [FONT.ttf]");
-    }
-    let text = std::fs::read_to_string(&args[1])?;
-    let font = FontVec::try_from_vec(std::fs::read(
-        args.get(3).map(String::as_str).unwrap_or(DEFAULT_FONT),
-    )?)?;
+pub fn run(capture: &Path, out: &Path, font: Option<&Path>) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(capture)?;
+    let font = FontVec::try_from_vec(std::fs::read(font.unwrap_or(Path::new(DEFAULT_FONT)))?)?;
     let lines: Vec<&str> = text.lines().collect();
     let rows = lines.len() as u16;
     let cols = 250;
@@ -155,7 +150,7 @@ fn main() -> anyhow::Result<()> {
             }
         }
     }
-    img.save(&args[2])?;
-    println!("wrote {} ({}x{} cells)", args[2], used_cols, rows);
+    img.save(out)?;
+    println!("wrote {} ({}x{} cells)", out.display(), used_cols, rows);
     Ok(())
 }

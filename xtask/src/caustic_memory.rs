@@ -1,12 +1,11 @@
 //! Bytes per pixel of one pass's light-traced state (splats and kept vertices) on a built-in
-//! scene, averaged over passes: `cargo run --release --example caustic_memory -- cornell`.
+//! scene, averaged over passes: `cargo xtask caustic-memory cornell`.
 
 use ptui::integrator::caustics::{CausticTracer, CausticVertex, Splat};
 use ptui::settings::{RenderSettings, SettingsOverrides};
 
-fn main() -> anyhow::Result<()> {
-    let name = std::env::args().nth(1).unwrap_or_else(|| "cornell".into());
-    let scene = ptui::scene::load(&name)?;
+pub fn run(name: &str) -> anyhow::Result<()> {
+    let scene = ptui::scene::load(name)?;
     let settings = RenderSettings::merged(&[&scene.render, &SettingsOverrides::default()]);
     let tracer = CausticTracer::new(&scene, &settings).map_err(anyhow::Error::msg)?;
     let pixels = settings.width as f64 * settings.height as f64;

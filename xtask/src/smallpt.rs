@@ -1,12 +1,12 @@
-//! smallpt as the baseline of `ptui bench error --smallpt BIN`: the performance issue states its
-//! targets against smallpt on the machine that measures them (2x its paths per second with the
-//! same estimator, a third of its error at equal time), so the baseline runs in the same
-//! session as ptui's series, before and after them, and the ratios come from that one run.
+//! smallpt as the baseline of `cargo xtask bench-error --smallpt BIN`: the targets
+//! (benches/README.md) are stated against smallpt on the machine that measures them, so the
+//! baseline runs in the same session as ptui's series, before and after them, and the ratios
+//! come from that one run.
 //! `BIN` is `benches/smallpt/smallpt.cpp` built with `g++ -O3 -fopenmp`: it renders whole-image
 //! passes of 4 spp for a time budget and writes its unclamped mean as linear PFM.
 
-use crate::analysis::reference::{self, LinearImage};
 use anyhow::Context;
+use ptui::analysis::reference::{self, LinearImage};
 use std::path::Path;
 use std::process::Command;
 

@@ -1,0 +1,91 @@
+//! ptui's developer tooling, run as `cargo xtask <task>` (an alias in .cargo/config.toml): the
+//! equal-time error benchmark against smallpt, the generators of committed scene files, and
+//! probes and converters used while developing. Not shipped: the `ptui` binary keeps only what
+//! a user measures (`ptui bench scenes`, `ptui bench accel`). Targets are in benches/README.md.
+
+mod ansi_to_png;
+mod bench_error;
+mod caustic_memory;
+mod error_breakdown;
+mod gen_extreme;
+mod gen_spheres_field;
+mod probe_limits;
+mod smallpt;
+
+use clap::{Parser, Subcommand};
+use std::path::{Path, PathBuf};
+
+#[derive(Parser, Debug)]
+#[command(name = "cargo xtask", about = "ptui's developer tooling (not shipped)")]
+struct Cli {
+    #[command(subcommand)]
+    task: Task,
+}
+
+#[derive(Subcommand, Debug)]
+enum Task {
+    /// Equal-time error, 320x240, 2 threads: RMSE against the reference on cornell for path and
+    /// naive with sobol and independent samples; path vs naive estimated error on
+    /// cornell-small-light; on both, path with caustics = path (NEE + MIS alone) too. With
+    /// --smallpt, the same measured as ratios to smallpt run in the same sitting.
+    BenchError(bench_error::Args),
+    /// Rewrite scenes/extreme/ (the transformations of the built-in scenes), or with --probe DIR
+    /// write the beyond-the-limit variants there instead.
+    GenExtreme {
+        #[arg(long, value_name = "DIR")]
+        probe: Option<PathBuf>,
+    },
+    /// Rewrite scenes/spheres-field.toml (seeded: the same file every time).
+    GenSpheresField,
+    /// Render scene files with the same seed as the scene each is `same_as`, and print how far
+    /// the two images drift apart (see docs/TESTING.md).
+    ProbeLimits {
+        #[arg(required = true)]
+        scenes: Vec<String>,
+    },
+    /// Bytes per pixel of one pass's light-traced state (splats and kept vertices).
+    CausticMemory {
+        #[arg(default_value = "cornell")]
+        scene: String,
+    },
+    /// Where an image's error against a reference sits; optionally a heat map PNG.
+    /// REGION=x0,y0,x1,y1 also prints that rectangle's share.
+    ErrorBreakdown {
+        image: PathBuf,
+        reference: PathBuf,
+        heat: Option<PathBuf>,
+    },
+    /// A terminal capture with colour escapes (`tmux capture-pane -p -e`) to a PNG.
+    AnsiToPng {
+        capture: PathBuf,
+        out: PathBuf,
+        font: Option<PathBuf>,
+    },
+}
+
+/// The workspace root (the `ptui` package), whatever the working directory.
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap_or(Path::new(".."))
+}
+
+fn main() -> anyhow::Result<()> {
+    match Cli::parse().task {
+        Task::BenchError(args) => bench_error::run(&args),
+        Task::GenExtreme { probe } => {
+            Ok(gen_extreme::write(probe, &root().join("scenes/extreme"))?)
+        }
+        Task::GenSpheresField => Ok(gen_spheres_field::write(
+            &root().join("scenes/spheres-field.toml"),
+        )?),
+        Task::ProbeLimits { scenes } => probe_limits::run(&scenes),
+        Task::CausticMemory { scene } => caustic_memory::run(&scene),
+        Task::ErrorBreakdown {
+            image,
+            reference,
+            heat,
+        } => error_breakdown::run(&image, &reference, heat.as_deref()),
+        Task::AnsiToPng { capture, out, font } => ansi_to_png::run(&capture, &out, font.as_deref()),
+    }
+}
