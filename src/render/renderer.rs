@@ -258,10 +258,7 @@ impl Renderer {
         let threads = self.pool.current_num_threads() as u32;
         // Enough bands that both cores stay busy to the end of the batch, few enough that the
         // per-task overhead is nothing next to a row of paths. A thread finishing its last band
-        // early idles until the batch ends (measured with one pass a batch: 7-row bands at
-        // 320x240 (height / 16 per thread) cost path 1.3% and naive 0.4% against the 1-row bands
-        // of height / 64 per thread (2 threads, medians of 5 alternating runs; 1 -> 2 threads
-        // went 1.89x -> 1.90x for naive)).
+        // early idles until the batch ends (benches/HISTORY.md#row-bands).
         let band_rows = (settings.height / (threads * 64)).clamp(1, 8);
         let tracer = self.caustics.as_ref();
         // The batch's first pass's light paths: traced during the batch before, or now.

@@ -9,7 +9,8 @@ use crate::render::adaptive::SampleMap;
 use crate::render::film::FilmRows;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
-use crate::settings::{IntegratorKind, RenderSettings};
+use crate::integrator::PixelSample;
+use crate::settings::RenderSettings;
 use super::schedule::PassTally;
 
 
@@ -82,12 +83,18 @@ pub(super) struct CameraSamples<'a> {
 }
 
 impl Iterator for CameraSamples<'_> {
-    type Item = (Ray, Sampler);
+    type Item = (PixelSample, Ray, Sampler);
 
     #[inline(always)]
-    fn next(&mut self) -> Option<(Ray, Sampler)> {
+    fn next(&mut self) -> Option<(PixelSample, Ray, Sampler)> {
         let &(x, sample) = self.plan.next()?;
-        Some(camera_sample(self.scene, self.settings, x, self.y, sample))
+        let (ray, sampler) = camera_sample(self.scene, self.settings, x, self.y, sample);
+        let px = PixelSample {
+            x,
+            y: self.y,
+            sample,
+        };
+        Some((px, ray, sampler))
     }
 }
 
@@ -112,8 +119,7 @@ pub(super) const STREAM_SAMPLES: usize = if cfg!(test) { 24 } else { 2048 };
 /// Per-thread scratch for [`sample_row`].
 #[derive(Default)]
 pub struct RowScratch {
-    naive: integrator::naive::Stream,
-    path: integrator::path::Stream,
+    streams: integrator::Streams,
     /// The row's samples of the pass: (x, sample number), in x order.
     pub plan: Vec<(u32, u64)>,
 }
@@ -168,16 +174,14 @@ pub struct PassRows<'a> {
 }
 
 /// The samples of every pixel of row `y` in pass `rows.pass` (one each, or as its map says)
-/// into `out` (radiance and closest-hit queries), in the order of `scratch.plan`:
-/// [`sample_pixel_counted`] one by one for `painterly`; `path` and `naive` trace the row's paths
-/// side by side with batched closest-hit queries (the same image bit for bit, faster).
+/// into `out` (radiance and closest-hit queries), in the order of `scratch.plan`, by
+/// [`integrator::radiance_row`].
 ///
 /// Runs a copy compiled for x86-64-v3 where the CPU has it, the build's own elsewhere
 /// ([`ShadingCode`]). The integrators' hot functions are `#[inline(always)]` so both copies hold
 /// all of the shading. Rust never contracts a multiply and an add into an FMA, so the copies
-/// give the same bits (checked by `rows_traced_side_by_side_match_paths_traced_alone`). Measured
-/// on an AMD EPYC (Zen 4), cornell 320x240, 2 threads: the inlining alone 10% faster, the v3
-/// copy 5% more (README, performance).
+/// give the same bits (checked by `rows_traced_side_by_side_match_paths_traced_alone`).
+/// Both the inlining and the v3 copy are faster (benches/HISTORY.md#compiled-copies).
 pub fn sample_row(rows: &PassRows, y: u32, scratch: &mut RowScratch, out: &mut Vec<(DVec3, u32)>) {
     // SAFETY: `ShadingCode::detect` found every feature the copy is compiled for.
     match ShadingCode::detect() {
@@ -225,17 +229,6 @@ pub(super) fn sample_row_body(rows: &PassRows, y: u32, scratch: &mut RowScratch,
     }
     let caustics = caustics.map(|c| c.for_row(settings.seed, pass, y));
     out.clear();
-    if settings.integrator == IntegratorKind::Painterly {
-        // A plain loop, not `extend` over a map: the closure was compiled apart from the fast
-        // copy, in portable code.
-        for &(x, sample) in &scratch.plan {
-            out.push(sample_pixel_counted(
-                scene, settings, x, y, sample, caustics,
-            ));
-        }
-        return;
-    }
-    let max_depth = integrator::depth_limit(settings);
     // In pieces of at most STREAM_SAMPLES: an adaptive row takes up to 16 samples a pixel, and a
     // stream keeps each sample's state (path, sampler, shadow rays, ray batch: see
     // STREAM_SAMPLES) in the thread's buffers for the rest of the render. Each path's result
@@ -247,12 +240,6 @@ pub(super) fn sample_row_body(rows: &PassRows, y: u32, scratch: &mut RowScratch,
             y,
             plan: piece.iter(),
         };
-        if settings.integrator == IntegratorKind::Naive {
-            scratch.naive.radiance(scene, samples, max_depth, out);
-        } else {
-            scratch
-                .path
-                .radiance(scene, samples, max_depth, caustics, out);
-        }
+        integrator::radiance_row(settings, scene, samples, caustics, &mut scratch.streams, out);
     }
 }
