@@ -149,8 +149,13 @@ impl<P: StreamPath> Stream<P> {
                     continue;
                 }
                 let prim = self.batch.prim[j];
-                let hit =
-                    (prim != u32::MAX).then(|| scene.hit_at(path.ray(), self.batch.t[j], prim));
+                // An `if`, not `bool::then`: the closure would be compiled apart from the row
+                // tracer's fast copy.
+                let hit = if prim != u32::MAX {
+                    Some(scene.hit_at(path.ray(), self.batch.t[j], prim))
+                } else {
+                    None
+                };
                 j += 1;
                 *go_on = path.vertex(scene, hit.as_ref(), sampler, row, shadows);
                 if queue_rays(path, sampler, shadows, *go_on, &mut self.next_batch) {
@@ -160,7 +165,9 @@ impl<P: StreamPath> Stream<P> {
             std::mem::swap(&mut self.batch, &mut self.next_batch);
             std::mem::swap(&mut self.active, &mut self.next);
         }
-        out.extend(self.paths.iter().map(|(p, s, _, _)| (p.radiance(), s.rays())));
+        for (p, s, _, _) in &self.paths {
+            out.push((p.radiance(), s.rays()));
+        }
     }
 }
 
