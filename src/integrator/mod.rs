@@ -115,8 +115,11 @@ pub struct PixelSample {
 /// camera-path integrator's state machine, or with painterly's one-path estimator.
 trait WithIntegrator {
     type Out;
-    fn paths<P: StreamPath>(self, row: P::Row<'_>, streams: fn(&mut Streams) -> &mut Stream<P>)
-        -> Self::Out;
+    fn paths<P: StreamPath>(
+        self,
+        row: P::Row<'_>,
+        streams: fn(&mut Streams) -> &mut Stream<P>,
+    ) -> Self::Out;
     fn painterly(self) -> Self::Out;
 }
 
@@ -145,7 +148,8 @@ fn painterly_radiance(
     px: PixelSample,
 ) -> DVec3 {
     let p = &settings.painterly;
-    let stream = painterly::stream::PaintStream::new(settings.seed, px.x, px.y, px.sample as u32, p);
+    let stream =
+        painterly::stream::PaintStream::new(settings.seed, px.x, px.y, px.sample as u32, p);
     painterly::radiance(scene, ray, sampler, depth_limit(settings), p, &stream)
 }
 
@@ -169,7 +173,11 @@ pub fn radiance(
     impl WithIntegrator for One<'_> {
         type Out = DVec3;
         #[inline(always)]
-        fn paths<P: StreamPath>(self, row: P::Row<'_>, _: fn(&mut Streams) -> &mut Stream<P>) -> DVec3 {
+        fn paths<P: StreamPath>(
+            self,
+            row: P::Row<'_>,
+            _: fn(&mut Streams) -> &mut Stream<P>,
+        ) -> DVec3 {
             stream::radiance_one::<P>(self.scene, self.ray, self.sampler, row)
         }
         #[inline(always)]

@@ -4,8 +4,8 @@
 //! Its bounce ([`NaivePath::bounce`]) is driven by the shared drivers ([`super::stream`]): one
 //! path at a time, or a row's paths side by side with their closest hits asked for at once.
 
-use super::{next_ray, sample_bsdf};
 use super::stream::{radiance_one, StreamPath};
+use super::{next_ray, sample_bsdf};
 use crate::geometry::Hit;
 use crate::math::{DVec3, Ray};
 use crate::sampling::Sampler;

@@ -8,8 +8,8 @@
 //! the emission counts in full.
 
 use super::caustics::{connection_ratio, CausticPass, JOIN_ATTEMPT};
-use super::{next_ray, sample_bsdf};
 use super::stream::{radiance_one, ShadowRays, StreamPath};
+use super::{next_ray, sample_bsdf};
 use crate::geometry::Primitive;
 use crate::geometry::{spawn_origin, Hit, Normals};
 use crate::light::LightSample;

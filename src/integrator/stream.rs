@@ -121,7 +121,8 @@ impl<P: StreamPath> Stream<P> {
         // (`render::sample_row`) only covers what is inlined into it, and the closure was not.
         for (_, ray, mut sampler) in samples {
             let path = P::start(ray, &mut sampler, row);
-            self.paths.push((path, sampler, P::Shadows::default(), true));
+            self.paths
+                .push((path, sampler, P::Shadows::default(), true));
         }
         self.active.clear();
         self.active.extend(0..self.paths.len() as u32);

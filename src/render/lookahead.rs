@@ -1,11 +1,10 @@
 //! The light-path look-ahead: each pass's light paths, traced during the pass before.
 
+use super::schedule::{lock, wait_until};
 use crate::integrator::caustics::{CausticTracer, PassSplats};
 use crate::scene::Scene;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
-use super::schedule::{lock, wait_until};
-
 
 /// The light paths of a batch's passes (with a caustic tracer). Pass k's are traced by the
 /// thread that takes the middle band of pass k - 1 (the batch's first pass's during the batch

@@ -1,5 +1,7 @@
 //! The renderer: a film, its passes run in batches on a rayon pool, and what they counted.
 
+use super::lookahead::BatchLight;
+use super::schedule::{trace_rows, Batch};
 use crate::integrator::caustics::{CausticTracer, PassSplats};
 use crate::render::adaptive::{SampleMap, PILOT_PASSES};
 use crate::render::film::{ErrorEstimate, Film};
@@ -8,9 +10,6 @@ use crate::settings::{IntegratorKind, RenderSettings};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use super::lookahead::BatchLight;
-use super::schedule::{trace_rows, Batch};
-
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PassOutcome {

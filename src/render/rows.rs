@@ -1,18 +1,17 @@
 //! Row tracing: the camera samples of a row in one pass, traced one by one or side by side
 //! as the integrator allows, and each pixel's splats.
 
+use super::schedule::PassTally;
 use crate::cpu::{v3_copy, ShadingCode};
 use crate::integrator;
 use crate::integrator::caustics::{CausticPass, PassSplats};
+use crate::integrator::PixelSample;
 use crate::math::{DVec3, Ray};
 use crate::render::adaptive::SampleMap;
 use crate::render::film::FilmRows;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
-use crate::integrator::PixelSample;
 use crate::settings::RenderSettings;
-use super::schedule::PassTally;
-
 
 /// Camera sample number `sample` of pixel (x, y) (without adaptive sampling, the one of pass
 /// `sample`): a jittered ray through the pixel's square footprint (box filter) and its radiance.
@@ -205,7 +204,12 @@ v3_copy! {
 }
 
 #[inline(always)]
-pub(super) fn sample_row_body(rows: &PassRows, y: u32, scratch: &mut RowScratch, out: &mut Vec<(DVec3, u32)>) {
+pub(super) fn sample_row_body(
+    rows: &PassRows,
+    y: u32,
+    scratch: &mut RowScratch,
+    out: &mut Vec<(DVec3, u32)>,
+) {
     let PassRows {
         scene,
         settings,
@@ -240,6 +244,13 @@ pub(super) fn sample_row_body(rows: &PassRows, y: u32, scratch: &mut RowScratch,
             y,
             plan: piece.iter(),
         };
-        integrator::radiance_row(settings, scene, samples, caustics, &mut scratch.streams, out);
+        integrator::radiance_row(
+            settings,
+            scene,
+            samples,
+            caustics,
+            &mut scratch.streams,
+            out,
+        );
     }
 }

@@ -1,6 +1,8 @@
 //! Work scheduling: the (pass, band of rows) items of a batch, taken in turn by the pool's
 //! threads from one counter, each band's passes in order.
 
+use super::lookahead::BatchLight;
+use super::rows::{trace_row, PassRows, ROW_BUFFERS};
 use crate::render::adaptive::SampleMap;
 use crate::render::film::{Film, FilmRows};
 use crate::scene::Scene;
@@ -8,9 +10,6 @@ use crate::settings::RenderSettings;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
-use super::lookahead::BatchLight;
-use super::rows::{trace_row, PassRows, ROW_BUFFERS};
-
 
 /// What every band of a batch shares: the scene, the settings, the batch's first pass, the
 /// adaptive map (none before the pilot ends) and the passes' light paths.
@@ -129,7 +128,10 @@ pub(super) fn band_turn<'a, T>(
 /// `ready`'s value once it has one, yielding the core between tries (the waits of a batch are
 /// short and rare: a band or a pass's light paths another thread is about to finish); None if
 /// `stop` says so first (the render is cancelled, or a thread panicked).
-pub(super) fn wait_until<R>(mut ready: impl FnMut() -> Option<R>, stop: &dyn Fn() -> bool) -> Option<R> {
+pub(super) fn wait_until<R>(
+    mut ready: impl FnMut() -> Option<R>,
+    stop: &dyn Fn() -> bool,
+) -> Option<R> {
     loop {
         if let Some(r) = ready() {
             return Some(r);

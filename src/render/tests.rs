@@ -7,13 +7,13 @@ use crate::integrator::caustics::CausticTracer;
 use crate::math::DVec3;
 use crate::render::adaptive::{SampleMap, PILOT_PASSES};
 use crate::render::film::Film;
+use crate::sampling::SamplerKind;
 use crate::scene::Scene;
 use crate::settings::{IntegratorKind, RenderSettings};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-use crate::sampling::SamplerKind;
 
 /// A 40x30 adaptive map with weights from 1 to the maximum: noise grows to the right.
 fn test_map() -> SampleMap {
