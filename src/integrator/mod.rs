@@ -1,15 +1,18 @@
 //! Estimators of the radiance arriving along a camera ray. Each is a plain function over the
-//! immutable scene and a per-sample [`Sampler`]; the closed set is dispatched by one `match`.
+//! immutable scene and a per-sample [`Sampler`]; the closed set is chosen by one `match`
+//! ([`with_integrator`]), for one path ([`radiance`]) and for a row of them ([`radiance_row`]).
 
 pub mod caustics;
 pub mod naive;
 pub mod painterly;
 pub mod path;
+pub mod stream;
 
 use crate::math::{max_component, DVec3, Ray};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::settings::{IntegratorKind, RenderSettings};
+use stream::{Stream, StreamPath};
 
 /// Survival probability never exceeds this, so a path whose throughput stays at 1 (a camera in a
 /// closed mirror box, glass of colour 1 trapping a path by total internal reflection) still ends:
@@ -108,6 +111,48 @@ pub struct PixelSample {
     pub sample: u64,
 }
 
+/// What is done with the integrator `settings` choose ([`with_integrator`]): with a
+/// camera-path integrator's state machine, or with painterly's one-path estimator.
+trait WithIntegrator {
+    type Out;
+    fn paths<P: StreamPath>(
+        self,
+        row: P::Row<'_>,
+        streams: fn(&mut Streams) -> &mut Stream<P>,
+    ) -> Self::Out;
+    fn painterly(self) -> Self::Out;
+}
+
+/// The one place the integrator is chosen: `w` run with the integrator `settings` choose.
+#[inline(always)]
+fn with_integrator<W: WithIntegrator>(
+    settings: &RenderSettings,
+    caustics: Option<caustics::CausticPass>,
+    w: W,
+) -> W::Out {
+    let max_depth = depth_limit(settings);
+    match settings.integrator {
+        IntegratorKind::Path => w.paths::<path::PathState>((max_depth, caustics), |s| &mut s.path),
+        IntegratorKind::Naive => w.paths::<naive::NaivePath>(max_depth, |s| &mut s.naive),
+        IntegratorKind::Painterly => w.painterly(),
+    }
+}
+
+/// Painterly's radiance along `ray` for camera sample `px`.
+#[inline(always)]
+fn painterly_radiance(
+    settings: &RenderSettings,
+    scene: &Scene,
+    ray: Ray,
+    sampler: &mut Sampler,
+    px: PixelSample,
+) -> DVec3 {
+    let p = &settings.painterly;
+    let stream =
+        painterly::stream::PaintStream::new(settings.seed, px.x, px.y, px.sample as u32, p);
+    painterly::radiance(scene, ray, sampler, depth_limit(settings), p, &stream)
+}
+
 /// Radiance along `ray` by the integrator `settings` choose.
 #[inline(always)]
 pub fn radiance(
@@ -118,17 +163,89 @@ pub fn radiance(
     px: PixelSample,
     caustics: Option<caustics::CausticPass>,
 ) -> DVec3 {
-    let max_depth = depth_limit(settings);
-    match settings.integrator {
-        IntegratorKind::Path => path::radiance(scene, ray, sampler, max_depth, caustics),
-        IntegratorKind::Naive => naive::radiance(scene, ray, sampler, max_depth),
-        IntegratorKind::Painterly => {
-            let p = &settings.painterly;
-            let stream =
-                painterly::stream::PaintStream::new(settings.seed, px.x, px.y, px.sample as u32, p);
-            painterly::radiance(scene, ray, sampler, max_depth, p, &stream)
+    struct One<'a> {
+        settings: &'a RenderSettings,
+        scene: &'a Scene,
+        ray: Ray,
+        sampler: &'a mut Sampler,
+        px: PixelSample,
+    }
+    impl WithIntegrator for One<'_> {
+        type Out = DVec3;
+        #[inline(always)]
+        fn paths<P: StreamPath>(
+            self,
+            row: P::Row<'_>,
+            _: fn(&mut Streams) -> &mut Stream<P>,
+        ) -> DVec3 {
+            stream::radiance_one::<P>(self.scene, self.ray, self.sampler, row)
+        }
+        #[inline(always)]
+        fn painterly(self) -> DVec3 {
+            painterly_radiance(self.settings, self.scene, self.ray, self.sampler, self.px)
         }
     }
+    let one = One {
+        settings,
+        scene,
+        ray,
+        sampler,
+        px,
+    };
+    with_integrator(settings, caustics, one)
+}
+
+/// Per-thread scratch for [`radiance_row`]: the stream drivers' buffers, kept from row to row.
+#[derive(Default)]
+pub struct Streams {
+    naive: Stream<naive::NaivePath>,
+    path: Stream<path::PathState>,
+}
+
+/// The radiance and closest-hit query count of every camera sample of `samples` (its pixel
+/// sample, ray and sampler), in order, into `out`, by the integrator `settings` choose:
+/// `path` and `naive` trace the paths side by side with batched closest-hit queries (the same
+/// bits as one by one), `painterly` one by one.
+#[inline(always)]
+pub fn radiance_row(
+    settings: &RenderSettings,
+    scene: &Scene,
+    samples: impl Iterator<Item = (PixelSample, Ray, Sampler)>,
+    caustics: Option<caustics::CausticPass>,
+    streams: &mut Streams,
+    out: &mut Vec<(DVec3, u32)>,
+) {
+    struct Row<'a, I> {
+        settings: &'a RenderSettings,
+        scene: &'a Scene,
+        samples: I,
+        streams: &'a mut Streams,
+        out: &'a mut Vec<(DVec3, u32)>,
+    }
+    impl<I: Iterator<Item = (PixelSample, Ray, Sampler)>> WithIntegrator for Row<'_, I> {
+        type Out = ();
+        #[inline(always)]
+        fn paths<P: StreamPath>(self, row: P::Row<'_>, stream: fn(&mut Streams) -> &mut Stream<P>) {
+            stream(self.streams).radiance(self.scene, self.samples, row, self.out);
+        }
+        #[inline(always)]
+        fn painterly(self) {
+            // A plain loop, not `extend` over a map: the closure would be compiled apart from
+            // the row tracer's fast copy, in portable code.
+            for (px, ray, mut sampler) in self.samples {
+                let l = painterly_radiance(self.settings, self.scene, ray, &mut sampler, px);
+                self.out.push((l, sampler.rays()));
+            }
+        }
+    }
+    let row = Row {
+        settings,
+        scene,
+        samples,
+        streams,
+        out,
+    };
+    with_integrator(settings, caustics, row)
 }
 
 #[cfg(test)]

@@ -1,32 +1,23 @@
 //! smallpt's estimator: follow BSDF samples, add emission wherever a path hits it. Kept as the
 //! baseline that shows what next-event estimation and MIS buy.
 //!
-//! Two drivers share one bounce ([`NaivePath::bounce`]): [`radiance`] follows one path to its
-//! end, [`Stream`] follows a row's paths side by side, asking the accelerator for all their
-//! closest hits at once ([`Scene::intersect_batch`], spheres tested across eight rays per
-//! vector). Same numbers in the same order per path, so the same image bit for bit.
+//! Its bounce ([`NaivePath::bounce`]) is driven by the shared drivers ([`super::stream`]): one
+//! path at a time, or a row's paths side by side with their closest hits asked for at once.
 
+use super::stream::{radiance_one, StreamPath};
 use super::{next_ray, sample_bsdf};
-use crate::accel::lanes::RayBatch;
 use crate::geometry::Hit;
 use crate::math::{DVec3, Ray};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
 pub fn radiance(scene: &Scene, ray: Ray, sampler: &mut Sampler, max_depth: u32) -> DVec3 {
-    let mut path = NaivePath::new(ray);
-    loop {
-        sampler.count_ray();
-        let hit = scene.intersect(&path.ray, f64::INFINITY);
-        if !path.bounce(scene, hit.as_ref(), sampler, max_depth) {
-            return path.l;
-        }
-    }
+    radiance_one::<NaivePath>(scene, ray, sampler, max_depth)
 }
 
 /// One path's state between closest-hit queries.
 #[derive(Clone, Copy, Debug)]
-struct NaivePath {
+pub(crate) struct NaivePath {
     ray: Ray,
     l: DVec3,
     beta: DVec3,
@@ -83,52 +74,40 @@ impl NaivePath {
     }
 }
 
-/// Scratch space to trace many camera samples side by side; keep one per thread and reuse it.
-#[derive(Default)]
-pub struct Stream {
-    paths: Vec<(NaivePath, Sampler)>,
-    active: Vec<u32>,
-    next: Vec<u32>,
-    batch: RayBatch,
-}
+impl StreamPath for NaivePath {
+    /// The depth limit.
+    type Row<'r> = u32;
+    type Shadows = ();
 
-impl Stream {
-    /// Trace every camera sample of `samples` (its ray and sampler) to its end; appends each
-    /// one's radiance and closest-hit query count, in order, to `out`.
     #[inline(always)]
-    pub fn radiance(
+    fn start(ray: Ray, _: &mut Sampler, _: u32) -> Self {
+        NaivePath::new(ray)
+    }
+
+    #[inline(always)]
+    fn ray(&self) -> &Ray {
+        &self.ray
+    }
+
+    #[inline(always)]
+    fn vertex(
         &mut self,
         scene: &Scene,
-        samples: impl Iterator<Item = (Ray, Sampler)>,
+        hit: Option<&Hit>,
+        sampler: &mut Sampler,
         max_depth: u32,
-        out: &mut Vec<(DVec3, u32)>,
-    ) {
-        self.paths.clear();
-        for (ray, sampler) in samples {
-            self.paths.push((NaivePath::new(ray), sampler));
-        }
-        self.active.clear();
-        self.active.extend(0..self.paths.len() as u32);
-        while !self.active.is_empty() {
-            self.batch.clear();
-            for &i in &self.active {
-                let (path, sampler) = &mut self.paths[i as usize];
-                sampler.count_ray();
-                self.batch.push(&path.ray, f64::INFINITY);
-            }
-            scene.intersect_batch(&mut self.batch);
-            self.next.clear();
-            for (j, &i) in self.active.iter().enumerate() {
-                let (path, sampler) = &mut self.paths[i as usize];
-                let prim = self.batch.prim[j];
-                let hit =
-                    (prim != u32::MAX).then(|| scene.hit_at(&path.ray, self.batch.t[j], prim));
-                if path.bounce(scene, hit.as_ref(), sampler, max_depth) {
-                    self.next.push(i);
-                }
-            }
-            std::mem::swap(&mut self.active, &mut self.next);
-        }
-        out.extend(self.paths.iter().map(|(p, s)| (p.l, s.rays())));
+        _: &mut (),
+    ) -> bool {
+        self.bounce(scene, hit, sampler, max_depth)
+    }
+
+    #[inline(always)]
+    fn add(&mut self, value: DVec3) {
+        self.l += value;
+    }
+
+    #[inline(always)]
+    fn radiance(&self) -> DVec3 {
+        self.l
     }
 }

@@ -8,8 +8,8 @@
 //! the emission counts in full.
 
 use super::caustics::{connection_ratio, CausticPass, JOIN_ATTEMPT};
+use super::stream::{radiance_one, ShadowRays, StreamPath};
 use super::{next_ray, sample_bsdf};
-use crate::accel::lanes::RayBatch;
 use crate::geometry::Primitive;
 use crate::geometry::{spawn_origin, Hit, Normals};
 use crate::light::LightSample;
@@ -30,10 +30,9 @@ pub(crate) const SEQUENCE_DEPTH: u32 = 2;
 /// by MIS: every non-delta vertex x connects to one of the pass's caustic vertices y, and the
 /// camera path that finds the light from y through the chain is weighted against that.
 ///
-/// Two drivers share one vertex ([`PathState::vertex`]): this one follows one path to its end,
-/// [`Stream`] follows a row's paths side by side and asks the accelerator for all their rays
-/// (continuations and shadow rays) at once. Each path draws the same numbers and adds the same
-/// terms in the same order either way, so the image is the same bit for bit.
+/// The shared drivers ([`super::stream`]) run its vertex ([`PathState::vertex`]): this one
+/// path to its end, or a row's paths side by side with all their rays (continuations and
+/// shadow rays) asked for at once; the same bits either way.
 pub fn radiance(
     scene: &Scene,
     ray: Ray,
@@ -41,29 +40,7 @@ pub fn radiance(
     max_depth: u32,
     caustics: Option<CausticPass>,
 ) -> DVec3 {
-    let mut path = PathState::new(ray, sampler, caustics);
-    loop {
-        sampler.count_ray();
-        let hit = scene.intersect(&path.ray, f64::INFINITY);
-        let mut shadows = Shadows::default();
-        let go_on = path.vertex(
-            scene,
-            hit.as_ref(),
-            sampler,
-            max_depth,
-            caustics,
-            &mut shadows,
-        );
-        for s in shadows.iter() {
-            sampler.count_ray();
-            if s.passes(scene.first_prim(&s.ray, s.t_max)) {
-                path.l += s.value;
-            }
-        }
-        if !go_on {
-            return path.l;
-        }
-    }
+    radiance_one::<PathState>(scene, ray, sampler, (max_depth, caustics))
 }
 
 /// A shadow ray: `value` counts if the first primitive along `ray` within `t_max` is `target`:
@@ -88,12 +65,13 @@ impl Shadow {
 /// The shadow rays one vertex asks for; their values already carry the path throughput and
 /// are added, in this order, before the next vertex's terms.
 #[derive(Clone, Copy, Debug, Default)]
-struct Shadows {
+pub(crate) struct Shadows {
     light: Option<Shadow>,
     join: Option<Shadow>,
 }
 
-impl Shadows {
+impl ShadowRays for Shadows {
+    #[inline(always)]
     fn iter(&self) -> impl Iterator<Item = &Shadow> {
         self.light.iter().chain(&self.join)
     }
@@ -101,7 +79,7 @@ impl Shadows {
 
 /// One camera path's state between rays.
 #[derive(Clone, Copy, Debug)]
-struct PathState {
+pub(crate) struct PathState {
     /// The ray to follow next.
     ray: Ray,
     l: DVec3,
@@ -195,6 +173,44 @@ impl Chains {
     }
 }
 
+impl StreamPath for PathState {
+    /// The depth limit and the pass's caustics.
+    type Row<'r> = (u32, Option<CausticPass<'r>>);
+    type Shadows = Shadows;
+
+    #[inline(always)]
+    fn start(ray: Ray, sampler: &mut Sampler, row: Self::Row<'_>) -> Self {
+        PathState::new(ray, sampler, row.1)
+    }
+
+    #[inline(always)]
+    fn ray(&self) -> &Ray {
+        &self.ray
+    }
+
+    #[inline(always)]
+    fn vertex(
+        &mut self,
+        scene: &Scene,
+        hit: Option<&Hit>,
+        sampler: &mut Sampler,
+        row: Self::Row<'_>,
+        shadows: &mut Shadows,
+    ) -> bool {
+        PathState::vertex(self, scene, hit, sampler, row.0, row.1, shadows)
+    }
+
+    #[inline(always)]
+    fn add(&mut self, value: DVec3) {
+        self.l += value;
+    }
+
+    #[inline(always)]
+    fn radiance(&self) -> DVec3 {
+        self.l
+    }
+}
+
 impl PathState {
     #[inline(always)]
     fn new(ray: Ray, sampler: &mut Sampler, caustics: Option<CausticPass>) -> Self {
@@ -219,7 +235,7 @@ impl PathState {
     /// Take in what `self.ray` hit: emission, the shadow rays of light sampling and of the
     /// caustic join (into `shadows`), and the next ray. Returns whether the path goes on. Four
     /// phases, each drawing its numbers in this order: run as loops over a group of paths each,
-    /// they were no faster (the README's levers).
+    /// they were no faster (benches/HISTORY.md#levers-tried).
     #[inline(always)]
     fn vertex(
         &mut self,
@@ -426,104 +442,6 @@ fn pick_ahead(caustics: Option<CausticPass>, sampler: &mut Sampler) -> Option<(u
     Some((k, rest))
 }
 
-/// Scratch space to trace many camera samples side by side; keep one per thread and reuse it.
-#[derive(Default)]
-pub struct Stream {
-    paths: Vec<(PathState, Sampler, Shadows, bool)>,
-    active: Vec<u32>,
-    next: Vec<u32>,
-    /// The round's rays, and the next round's, filled as each vertex asks for them.
-    batch: RayBatch,
-    next_batch: RayBatch,
-}
-
-impl Stream {
-    /// Trace every camera sample of `samples` (its ray and sampler) to its end; appends each
-    /// one's radiance and closest-hit query count, in order, to `out`. Each round asks the
-    /// accelerator at once for every live path's shadow rays from its last vertex and its
-    /// next ray.
-    #[inline(always)]
-    pub fn radiance(
-        &mut self,
-        scene: &Scene,
-        samples: impl Iterator<Item = (Ray, Sampler)>,
-        max_depth: u32,
-        caustics: Option<CausticPass>,
-        out: &mut Vec<(DVec3, u32)>,
-    ) {
-        self.paths.clear();
-        // A plain loop, not `extend` over a map: the render's fast copy of this function
-        // (`render::sample_row`) only covers what is inlined into it, and the closure was not.
-        for (ray, mut sampler) in samples {
-            let path = PathState::new(ray, &mut sampler, caustics);
-            self.paths.push((path, sampler, Shadows::default(), true));
-        }
-        self.active.clear();
-        self.active.extend(0..self.paths.len() as u32);
-        self.batch.clear();
-        for (path, sampler, _, _) in &mut self.paths {
-            queue_rays(path, sampler, &Shadows::default(), true, &mut self.batch);
-        }
-        while !self.active.is_empty() {
-            scene.intersect_batch(&mut self.batch);
-            // Each vertex's rays go straight into the next round's batch, in the order a
-            // separate pass over the paths would push them: their shadow rays, then their ray.
-            self.next_batch.clear();
-            self.next.clear();
-            let mut j = 0;
-            for &i in &self.active {
-                let (path, sampler, shadows, go_on) = &mut self.paths[i as usize];
-                for s in shadows.iter() {
-                    let first = self.batch.prim[j];
-                    if s.passes((first != u32::MAX).then_some(first)) {
-                        path.l += s.value;
-                    }
-                    j += 1;
-                }
-                if !*go_on {
-                    continue;
-                }
-                let prim = self.batch.prim[j];
-                let hit =
-                    (prim != u32::MAX).then(|| scene.hit_at(&path.ray, self.batch.t[j], prim));
-                j += 1;
-                *go_on = path.vertex(scene, hit.as_ref(), sampler, max_depth, caustics, shadows);
-                if queue_rays(path, sampler, shadows, *go_on, &mut self.next_batch) {
-                    self.next.push(i);
-                }
-            }
-            std::mem::swap(&mut self.batch, &mut self.next_batch);
-            std::mem::swap(&mut self.active, &mut self.next);
-        }
-        out.extend(self.paths.iter().map(|(p, s, _, _)| (p.l, s.rays())));
-    }
-}
-
-/// Queue a path's rays for the next round, in the order a vertex asks for them: its shadow
-/// rays, then its own ray if it goes on (a new path: just its camera ray). Returns whether it
-/// queued any, i.e. whether the path has a next round.
-#[inline(always)]
-fn queue_rays(
-    path: &PathState,
-    sampler: &mut Sampler,
-    shadows: &Shadows,
-    go_on: bool,
-    batch: &mut RayBatch,
-) -> bool {
-    let mut queued = false;
-    for s in shadows.iter() {
-        sampler.count_ray();
-        batch.push(&s.ray, s.t_max);
-        queued = true;
-    }
-    if go_on {
-        sampler.count_ray();
-        batch.push(&path.ray, f64::INFINITY);
-        queued = true;
-    }
-    queued
-}
-
 /// Join the non-delta camera vertex `hit` to the pass's caustic vertex `join.0` (`join.1` a
 /// uniform number for the roulette):
 /// f_x G f_y times the light path's weight, over the chance of that light path among the pass's,
@@ -563,10 +481,9 @@ fn connect_caustic(
         return None;
     }
     // Of those left, most lose it still once the two cosines join the bound (both BSDFs are
-    // diffuse here, f cos = f_cos_bound x |cos|, the same products `eval` forms below): 40% of
-    // the attempts pass the first bound, half of those this one, and half of those trace a ray.
-    // The cosines and the side test are `eval`'s own expressions, so the decisions are again the
-    // same.
+    // diffuse here, f cos = f_cos_bound x |cos|, the same products `eval` forms below;
+    // benches/HISTORY.md#caustic-join-bounds). The cosines and the side test are `eval`'s own
+    // expressions, so the decisions are again the same.
     let dir = to / d;
     let cos_x = dir.dot(hit.n);
     if wo.dot(hit.n) * cos_x <= 0.0 {
@@ -716,20 +633,19 @@ pub(crate) fn light_shadow(
 }
 
 /// The shadow ray of a light sample: from the offset origin towards the point on the light that
-/// the sampled direction `wi` (chosen from the hit point itself) reaches. Sending it along `wi`
-/// from the offset origin instead would shift it sideways by up to the offset (4 err, 1.4e-9 on
-/// smallpt's radius-1e5 walls), and a light that small misses: with radius 1e-8 a measured 5% of
-/// the light was lost. So a cone sample (no point on the light) goes along `wi` only where the
-/// intersection test itself says that ray meets the light sphere (`Sphere::hit_from_outside`,
-/// no root taken), and is aimed otherwise; finding the point and aiming at it was 7% of
-/// cornell-small-light's time. Falls back to `wi` when the aim cannot be recomputed (a light
-/// sampled from its own surface, or a direction that rounds past the light's rim).
+/// the sampled direction `wi` (chosen from the hit point itself) reaches. Sent along `wi` from
+/// the offset origin instead, it would be shifted sideways by up to the offset, and a small
+/// enough light would be missed. So a cone sample (no point on the light) goes along `wi` only
+/// where the intersection test itself says that ray meets the light sphere
+/// (`Sphere::hit_from_outside`, no root taken), and is aimed otherwise, the aim costing time
+/// (benches/HISTORY.md#shadow-ray-aim). Falls back to `wi` when the aim cannot be recomputed (a
+/// light sampled from its own surface, or a direction that rounds past the light's rim).
 #[inline(always)]
 fn shadow_ray(scene: &Scene, hit: &Hit, ls: &LightSample) -> Ray {
     let wi = ls.wi;
     let o = spawn_origin(hit.p, hit.n, hit.err, wi);
     // A match, not `or_else`: the closure was compiled apart from the render's fast copy
-    // (6.7% of cornell-small-light's time, whose cone samples carry no point).
+    // (benches/HISTORY.md#shadow-ray-aim).
     let target = match ls.point {
         Some(x) => Some(x),
         None => {
@@ -761,11 +677,11 @@ mod stream_tests {
     use super::*;
     use crate::sampling::SamplerKind;
 
-    /// The batched driver keeps one entry per pixel of a row per thread; the README's memory
-    /// account counts on it staying this small.
+    /// The batched driver keeps one entry per pixel of a row per thread; the memory
+    /// account (benches/HISTORY.md#memory) counts on it staying this small.
     #[test]
     fn a_stream_entry_stays_small() {
-        let size = std::mem::size_of::<(PathState, Sampler, Shadows, bool)>();
+        let size = std::mem::size_of::<(PathState, Sampler, Shadows, bool)>(); // a `Stream` entry
         println!("stream entry: {size} bytes");
         assert!(size <= 608, "{size} bytes");
     }
