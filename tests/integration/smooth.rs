@@ -2,9 +2,8 @@
 //! (the analytic Le / (1 - a) up to the shading normals' small, bounded loss), a coarse smooth
 //! sphere in a uniform environment whose silhouette must not go dark, and the `smooth` key.
 
-mod common;
 
-use common::{assert_furnace, load_str, render, z_for_two_sided};
+use crate::common::{assert_furnace, load_str, render, z_for_two_sided};
 use ptui::settings::{IntegratorKind, SettingsOverrides};
 use std::f64::consts::PI;
 use std::fmt::Write;

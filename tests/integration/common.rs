@@ -1,5 +1,4 @@
 //! Shared helpers for the integration tests: rendering a scene to a film, and statistics.
-#![allow(dead_code)]
 
 use ptui::render::film::Film;
 use ptui::render::Renderer;
@@ -142,11 +141,6 @@ pub fn erfc(x: f64) -> f64 {
     } else {
         2.0 - r
     }
-}
-
-/// Mean image of a film as f32 RGB.
-pub fn mean_image(film: &Film) -> Vec<f32> {
-    film.mean_rgb_f32()
 }
 
 /// A furnace's check: every pixel of `film` reads `expected` (per-pixel z-tests, Bonferroni over

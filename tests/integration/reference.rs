@@ -2,7 +2,7 @@
 //! Cornell box at 320x240 compared with `../shared/refs/cornell.exr`, and the quad Cornell box
 //! (`cornell-mesh`) at 320x240 with `tests/refs/cornell-mesh.exr` (see docs/REFERENCES.md).
 
-mod common;
+use crate::common;
 
 use ptui::analysis::reference;
 use ptui::render::Renderer;

@@ -2,9 +2,8 @@
 //! the sphere of directions, compare sample counts with the counts the claimed pdf predicts
 //! (integrated numerically over each bin), and pool sparse bins.
 
-mod common;
 
-use common::{chi2_sf, z_for_two_sided};
+use crate::common::{chi2_sf, z_for_two_sided};
 use ptui::geometry::{Normals, Sphere};
 use ptui::light::sphere::SphereLight;
 use ptui::material::{Material, MaterialKind};
