@@ -1,6 +1,5 @@
 //! The image depends only on (scene, settings, seed), never on the thread count or scheduling.
 
-
 use crate::common::render;
 use ptui::scene;
 use ptui::settings::{IntegratorKind, SettingsOverrides};

@@ -2,7 +2,6 @@
 //! Le / (1 - a) in every pixel (the Neumann series Le (1 + a + a^2 + ...)). Exercises Russian
 //! roulette, light sampling from inside an emitter, and MIS, against an analytic answer.
 
-
 use crate::common::{assert_furnace, load_str, render};
 use ptui::settings::{IntegratorKind, SettingsOverrides};
 
