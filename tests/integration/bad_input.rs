@@ -4,8 +4,12 @@
 //!
 //! Each case is a small scene with the offending line marked by a trailing `#!`; the error must
 //! start with `bad.toml:<that line>:` and carry the field path and a fragment of the message.
+//! The `[check]` table is read by the check code from the same text, so a case loads as
+//! `ptui check` does: the scene, then its check table.
 
-use ptui::scene::load_str;
+use ptui::analysis::check::{check_desc, Source};
+use ptui::scene::{load_str, SceneError};
+use std::borrow::Cow;
 
 const CAMERA: &str = "[camera]\nposition = [0, 0, 5]\n";
 
@@ -105,12 +109,23 @@ fn marked_line(src: &str) -> usize {
         .expect("case has a #! marker")
 }
 
+/// The scene and its `[check]` table, as `ptui check` reads a file.
+fn load(src: &str) -> Result<(), SceneError> {
+    load_str(src, "bad.toml")?;
+    check_desc(&Source {
+        name: "bad.toml".into(),
+        text: Cow::Owned(src.to_string()),
+        dir: None,
+    })?;
+    Ok(())
+}
+
 #[test]
 fn every_bad_value_is_named_with_file_line_and_field() {
     let mut failures = Vec::new();
     for (src, field, fragment) in cases() {
         let line = marked_line(&src);
-        let err = match load_str(&src, "bad.toml") {
+        let err = match load(&src) {
             Ok(_) => {
                 failures.push(format!("accepted:\n{src}"));
                 continue;
