@@ -29,6 +29,7 @@
 //! pixel where k rare samples all landed in one render reaches only |z| ~ sqrt(k).
 
 use crate::render::film::Film;
+use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
 
 /// Family-wise false-alarm probability of one check (split between its tests).
 pub const ALPHA: f64 = 0.01;
@@ -38,60 +39,97 @@ pub const ALPHA: f64 = 0.01;
 /// bits of its value. 1e-12 is thousands of ulps, far below any noise a test could resolve.
 const ROUNDING: f64 = 1e-12;
 
-/// Inverse of the standard normal CDF by Acklam's rational approximation, without his refinement
-/// step: relative error below 1e-5 over (0, 1) (measured against Python's `NormalDist`), far
-/// finer than a significance threshold needs.
+/// Inverse of the standard normal CDF (statrs, through erfc^-1): -inf at 0, +inf at 1, NaN
+/// outside [0, 1].
 pub fn normal_quantile(p: f64) -> f64 {
-    const A: [f64; 6] = [
-        -3.969683028665376e1,
-        2.209460984245205e2,
-        -2.759285104469687e2,
-        1.383_577_518_672_69e2,
-        -3.066479806614716e1,
-        2.506628277459239,
-    ];
-    const B: [f64; 5] = [
-        -5.447609879822406e1,
-        1.615858368580409e2,
-        -1.556989798598866e2,
-        6.680131188771972e1,
-        -1.328068155288572e1,
-    ];
-    const C: [f64; 6] = [
-        -7.784894002430293e-3,
-        -3.223964580411365e-1,
-        -2.400758277161838,
-        -2.549671010243049,
-        4.374664141464968,
-        2.938163982698783,
-    ];
-    const D: [f64; 4] = [
-        7.784695709041462e-3,
-        3.224671290700398e-1,
-        2.445134137142996,
-        3.754408661907416,
-    ];
-    const P_LOW: f64 = 0.02425;
     if p <= 0.0 {
-        return f64::NEG_INFINITY;
-    }
-    if p >= 1.0 {
-        return f64::INFINITY;
-    }
-    let tail = |q: f64| {
-        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
-            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
-    };
-    if p < P_LOW {
-        tail((-2.0 * p.ln()).sqrt())
-    } else if p > 1.0 - P_LOW {
-        -tail((-2.0 * (1.0 - p).ln()).sqrt())
+        f64::NEG_INFINITY
+    } else if p >= 1.0 {
+        f64::INFINITY
+    } else if p.is_nan() {
+        f64::NAN
     } else {
-        let q = p - 0.5;
-        let r = q * q;
-        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
-            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+        Normal::standard().inverse_cdf(p)
     }
+}
+
+/// Upper tail P(X > x) of the chi-square distribution with `dof` degrees of freedom (NaN unless
+/// `dof` > 0).
+pub fn chi2_sf(x: f64, dof: f64) -> f64 {
+    ChiSquared::new(dof).map_or(f64::NAN, |d| d.sf(x))
+}
+
+/// The x with P(X <= x) = `p` for chi-square with `dof` degrees of freedom (NaN unless `dof` > 0
+/// and `p` is in [0, 1]).
+pub fn chi2_quantile(p: f64, dof: f64) -> f64 {
+    match ChiSquared::new(dof) {
+        Ok(d) if (0.0..=1.0).contains(&p) => d.inverse_cdf(p),
+        _ => f64::NAN,
+    }
+}
+
+/// Bins expecting fewer samples than this are pooled into one by [`pearson_chi2`]: below it the
+/// statistic's chi-square approximation fails.
+pub const MIN_EXPECTED: f64 = 5.0;
+
+/// Result of [`pearson_chi2`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pearson {
+    /// Sum of (observed - expected)^2 / expected over the bins used.
+    pub chi2: f64,
+    /// Bins used, the pooled one included: the degrees of freedom are one fewer.
+    pub bins: usize,
+    /// Observations in bins that expect none: any is a failure of the density, whatever chi2.
+    pub stray: f64,
+}
+
+impl Pearson {
+    /// Upper tail probability of [`Self::chi2`] with `bins - 1` degrees of freedom.
+    pub fn p_value(&self) -> f64 {
+        chi2_sf(self.chi2, self.bins as f64 - 1.0)
+    }
+}
+
+/// Pearson's goodness-of-fit statistic of `observed` counts against `expected` ones (the same
+/// total), bin by bin; the bins expecting fewer than [`MIN_EXPECTED`] are pooled into one.
+pub fn pearson_chi2(observed: &[f64], expected: &[f64]) -> Pearson {
+    let mut t = Pearson {
+        chi2: 0.0,
+        bins: 0,
+        stray: 0.0,
+    };
+    let (mut pooled_obs, mut pooled_exp) = (0.0, 0.0);
+    for (obs, exp) in observed.iter().zip(expected) {
+        if *exp < MIN_EXPECTED {
+            pooled_obs += obs;
+            pooled_exp += exp;
+            if *exp == 0.0 {
+                t.stray += obs;
+            }
+        } else {
+            t.chi2 += (obs - exp).powi(2) / exp;
+            t.bins += 1;
+        }
+    }
+    if pooled_exp > 0.0 {
+        t.chi2 += (pooled_obs - pooled_exp).powi(2) / pooled_exp;
+        t.bins += 1;
+    }
+    t
+}
+
+/// Relative standard deviation of the RMSE of `x` against `reference` measured over their
+/// values, from the spread of the squared errors (the delta method: half that of their mean).
+pub fn rmse_relative_sd(x: &[f32], reference: &[f32]) -> f64 {
+    let sq: Vec<f64> = x
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| (*a as f64 - *b as f64).powi(2))
+        .collect();
+    let n = sq.len() as f64;
+    let mean = sq.iter().sum::<f64>() / n;
+    let var = sq.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    0.5 * (var / n).sqrt() / mean
 }
 
 /// Two-sided critical |z| for `tests` simultaneous tests at family-wise level `alpha`.
@@ -315,21 +353,42 @@ mod tests {
 
     #[test]
     fn quantiles_match_tables() {
-        // Values from the standard normal table (R's qnorm).
+        // Quantiles to 20 digits by mpmath (bisection on its normal CDF at 50 digits).
         for (p, z) in [
             (0.5, 0.0),
             (0.975, 1.959963984540054),
             (0.999, 3.090232306167813),
             (1e-6, -4.753424308822899),
             (0.01, -2.326347874040841),
-            (1e-12, -7.034483825101107),
+            (1e-12, -7.034_483_825_301_132),
         ] {
             let got = normal_quantile(p);
             assert!(
-                (got - z).abs() < 1e-5 * z.abs().max(1.0),
+                (got - z).abs() < 1e-12 * z.abs().max(1.0),
                 "p={p}: {got} vs {z}"
             );
         }
+        assert!(bonferroni_z(0.05, 1) - 1.959963984540054 < 1e-12);
+        // Chi-square quantiles and tails (mpmath at 40 digits).
+        for (p, dof, x) in [
+            (0.95, 1.0, 3.841_458_820_694_124),
+            (0.95, 10.0, 18.307_038_053_275_144),
+            (0.9999, 511.0, 638.528_499_912_281_1),
+        ] {
+            let got = chi2_quantile(p, dof);
+            assert!((got - x).abs() < 1e-9 * x, "p={p} dof={dof}: {got} vs {x}");
+            let tail = chi2_sf(x, dof);
+            assert!((tail - (1.0 - p)).abs() < 1e-9, "{dof}: {tail}");
+        }
+        assert!(chi2_sf(1.0, 0.0).is_nan() && chi2_quantile(1.5, 3.0).is_nan());
+    }
+
+    #[test]
+    fn pearson_pools_the_sparse_bins() {
+        let t = pearson_chi2(&[12.0, 8.0, 3.0, 1.0, 1.0], &[10.0, 10.0, 2.0, 2.0, 0.0]);
+        // (2^2 + 2^2) / 10 for the two full bins, (5 - 4)^2 / 4 for the pooled three.
+        assert!((t.chi2 - 1.05).abs() < 1e-12, "{t:?}");
+        assert_eq!((t.bins, t.stray), (3, 1.0));
     }
 
     fn film_of(

@@ -2,9 +2,8 @@
 //! (the analytic Le / (1 - a) up to the shading normals' small, bounded loss), a coarse smooth
 //! sphere in a uniform environment whose silhouette must not go dark, and the `smooth` key.
 
-mod common;
-
-use common::{assert_furnace, load_str, render, z_for_two_sided};
+use crate::common::{assert_furnace, load_str, render};
+use ptui::analysis::stats::bonferroni_z;
 use ptui::settings::{IntegratorKind, SettingsOverrides};
 use std::f64::consts::PI;
 use std::fmt::Write;
@@ -135,7 +134,7 @@ fn a_coarse_smooth_sphere_has_no_dark_silhouette() {
         assert_eq!(r.stats().invalid, 0);
         let film = r.film();
         let p = film.pixels();
-        let z = z_for_two_sided(1e-4 / p as f64);
+        let z = bonferroni_z(1e-4, p);
         let mut darkest = f64::INFINITY;
         for i in 0..p {
             let (m, v) = (film.mean(i).x, film.variance_of_mean(i).x.sqrt());

@@ -2,9 +2,7 @@
 //! Le / (1 - a) in every pixel (the Neumann series Le (1 + a + a^2 + ...)). Exercises Russian
 //! roulette, light sampling from inside an emitter, and MIS, against an analytic answer.
 
-mod common;
-
-use common::{assert_furnace, load_str, render};
+use crate::common::{assert_furnace, load_str, render};
 use ptui::settings::{IntegratorKind, SettingsOverrides};
 
 /// Russian roulette makes each pixel's samples skewed (most paths stop at the same short length,

@@ -6,7 +6,7 @@
 //!
 //! The OKLab conversion here is written out independently of `src/tui/dither.rs`.
 
-mod common;
+use crate::common;
 
 use ptui::scene;
 use ptui::session::{JobStatus, Snapshot};

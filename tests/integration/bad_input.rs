@@ -4,9 +4,12 @@
 //!
 //! Each case is a small scene with the offending line marked by a trailing `#!`; the error must
 //! start with `bad.toml:<that line>:` and carry the field path and a fragment of the message.
+//! The `[check]` table is read by the check code from the same text, so a case loads as
+//! `ptui check` does: the scene, then its check table.
 
 use ptui::analysis::check::{check_desc, Source};
-use ptui::scene::load_str;
+use ptui::scene::{load_str, SceneError};
+use std::borrow::Cow;
 
 const CAMERA: &str = "[camera]\nposition = [0, 0, 5]\n";
 
@@ -87,41 +90,15 @@ fn cases() -> Vec<(String, &'static str, &'static str)> {
             "duplicate object name `a`",
         ),
         (sphere("center = [0, 0, 0]\nradius = 1\nradius = 2 #!"), "", "duplicate key"),
+        // The [check] table of `ptui check`.
+        (format!("{CAMERA}\n[check]\nspp = 1 #!\n"), "check.spp", "at least 2 samples"),
+        (format!("{CAMERA}\n[check]\nrange = [2, 1] #!\n"), "check.range", "lo <= hi"),
+        (format!("{CAMERA}\n[check]\nrange = [0, nan] #!\n"), "check.range", "finite"),
+        (format!("{CAMERA}\n[check]\nmean = -1 #!\n"), "check.mean", "must be >= 0"),
+        (format!("{CAMERA}\n[check]\nexpect = 1 #!\n"), "check.expect", "unknown field `expect`"),
         // Syntax.
         (sphere("center = [0, 0, 0]\nradius = #!"), "", "expected"),
         (format!("{CAMERA}\n[[sphere] #!\n"), "", "expected"),
-    ]
-}
-
-/// The `[check]` table of `ptui check`: read by the check code from the scene's text, so a
-/// render ignores it and `check_desc` reports it with the scene's located errors.
-fn check_cases() -> Vec<(String, &'static str, &'static str)> {
-    vec![
-        (
-            format!("{CAMERA}\n[check]\nspp = 1 #!\n"),
-            "check.spp",
-            "at least 2 samples",
-        ),
-        (
-            format!("{CAMERA}\n[check]\nrange = [2, 1] #!\n"),
-            "check.range",
-            "lo <= hi",
-        ),
-        (
-            format!("{CAMERA}\n[check]\nrange = [0, nan] #!\n"),
-            "check.range",
-            "finite",
-        ),
-        (
-            format!("{CAMERA}\n[check]\nmean = -1 #!\n"),
-            "check.mean",
-            "must be >= 0",
-        ),
-        (
-            format!("{CAMERA}\n[check]\nexpect = 1 #!\n"),
-            "check.expect",
-            "unknown field `expect`",
-        ),
     ]
 }
 
@@ -132,26 +109,23 @@ fn marked_line(src: &str) -> usize {
         .expect("case has a #! marker")
 }
 
+/// The scene and its `[check]` table, as `ptui check` reads a file.
+fn load(src: &str) -> Result<(), SceneError> {
+    load_str(src, "bad.toml")?;
+    check_desc(&Source {
+        name: "bad.toml".into(),
+        text: Cow::Owned(src.to_string()),
+        dir: None,
+    })?;
+    Ok(())
+}
+
 #[test]
 fn every_bad_value_is_named_with_file_line_and_field() {
     let mut failures = Vec::new();
-    let checks = check_cases().into_iter().map(|c| (c, true));
-    for ((src, field, fragment), is_check) in cases().into_iter().map(|c| (c, false)).chain(checks)
-    {
+    for (src, field, fragment) in cases() {
         let line = marked_line(&src);
-        let loaded = if is_check {
-            let source = Source {
-                name: "bad.toml".into(),
-                text: src.clone().into(),
-                dir: None,
-            };
-            // The scene itself is fine: only the check table may fail.
-            load_str(&src, "bad.toml").expect("the scene part of a check case is valid");
-            check_desc(&source).map(|_| ())
-        } else {
-            load_str(&src, "bad.toml").map(|_| ())
-        };
-        let err = match loaded {
+        let err = match load(&src) {
             Ok(_) => {
                 failures.push(format!("accepted:\n{src}"));
                 continue;

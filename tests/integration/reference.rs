@@ -2,9 +2,9 @@
 //! Cornell box at 320x240 compared with `../shared/refs/cornell.exr`, and the quad Cornell box
 //! (`cornell-mesh`) at 320x240 with `tests/refs/cornell-mesh.exr` (see docs/REFERENCES.md).
 
-mod common;
+use crate::common;
 
-use ptui::analysis::reference;
+use ptui::analysis::{convergence, reference, stats};
 use ptui::render::Renderer;
 use ptui::sampling::SamplerKind;
 use ptui::scene;
@@ -74,20 +74,6 @@ fn cornell_mesh_is_unbiased_against_mitsuba() {
     assert_converges_to(r, &reference, ref_noise);
 }
 
-/// The relative standard deviation of an RMSE measured over the image's pixels and channels,
-/// from the spread of their squared errors (the delta method: half that of the mean square).
-fn rmse_spread(x: &[f32], reference: &[f32]) -> f64 {
-    let sq: Vec<f64> = x
-        .iter()
-        .zip(reference)
-        .map(|(a, b)| (*a as f64 - *b as f64).powi(2))
-        .collect();
-    let n = sq.len() as f64;
-    let mean = sq.iter().sum::<f64>() / n;
-    let var = sq.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    0.5 * (var / n).sqrt() / mean
-}
-
 /// The `noise_rmse = ...` line of a reference's noise estimate (written by its harness).
 fn noise_rmse(path: &Path) -> f64 {
     let text = std::fs::read_to_string(path)
@@ -122,7 +108,7 @@ fn assert_converges_to(mut r: Renderer, reference: &reference::LinearImage, ref_
             let img = r.film().mean_rgb_f32();
             let measured = reference::rmse(&img, &reference.data);
             rows.push((spp, measured, reference::channel_means(&img)));
-            spread.push(rmse_spread(&img, &reference.data));
+            spread.push(stats::rmse_relative_sd(&img, &reference.data));
         }
     }
     assert_eq!(r.stats().invalid, 0);
@@ -132,14 +118,17 @@ fn assert_converges_to(mut r: Renderer, reference: &reference::LinearImage, ref_
     // RMSE falls like 1/sqrt(spp): after removing the reference's noise, the slope of
     // log(rmse) against log(spp) is -1/2. With 76,800 pixels the RMSE itself is known to well
     // under 1%, so +-0.05 leaves room only for real bias or mis-scaled noise.
-    let points: Vec<(f64, f64)> = rows
+    let ours: Vec<(f64, f64)> = rows
         .iter()
         .map(|(spp, rmse, _)| {
             let ours = (rmse * rmse - ref_noise * ref_noise).max(1e-12).sqrt();
-            ((*spp as f64).ln(), ours.ln())
+            (*spp as f64, ours)
         })
         .collect();
-    let slope = fit_slope(&points);
+    let points: Vec<(f64, f64)> = ours.iter().map(|(n, e)| (n.ln(), e.ln())).collect();
+    let slope = convergence::fit_loglog(&ours)
+        .expect("four checkpoints")
+        .slope;
     assert!(
         (slope + 0.5).abs() < 0.05,
         "slope {slope:.3}, expected -0.5"
@@ -375,13 +364,4 @@ fn direct_light_under_the_cap_does_not_leak() {
         per_sample < 0.5,
         "per-sample deviation {per_sample:.3} x the mean"
     );
-}
-
-fn fit_slope(points: &[(f64, f64)]) -> f64 {
-    let n = points.len() as f64;
-    let mx = points.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = points.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    sxy / sxx
 }

@@ -1,7 +1,7 @@
 //! Triangles, quads and meshes in scene files: OBJ loading with clear errors, transforms, and the
 //! flat scan and the BVH giving identical images.
 
-mod common;
+use crate::common;
 
 use ptui::accel::AccelChoice;
 use ptui::render::Renderer;

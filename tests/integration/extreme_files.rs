@@ -2,7 +2,7 @@
 //! embeds: no scene can drift from its transformation or be left out of the checks.
 
 #[allow(dead_code)]
-#[path = "../xtask/src/gen_extreme.rs"]
+#[path = "../../xtask/src/gen_extreme.rs"]
 mod gen_extreme;
 
 use std::path::Path;

@@ -1,8 +1,6 @@
 //! The image depends only on (scene, settings, seed), never on the thread count or scheduling.
 
-mod common;
-
-use common::render;
+use crate::common::render;
 use ptui::scene;
 use ptui::settings::{IntegratorKind, SettingsOverrides};
 use std::sync::Arc;

@@ -2,7 +2,7 @@
 //! split path space differently but must estimate the same image. Compared pixel by pixel with
 //! the z-tests of `ptui check` (independent samples, variances from the films themselves).
 
-mod common;
+use crate::common;
 
 use ptui::analysis::stats;
 use ptui::integrator::caustics::CausticTracer;

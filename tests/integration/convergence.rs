@@ -379,7 +379,7 @@ fn target_error_stops_at_the_first_pass_at_or_below_it() {
 
 #[test]
 fn target_error_in_the_scene_file_is_read_and_validated() {
-    let src = include_str!("../scenes/cornell.toml");
+    let src = include_str!("../../scenes/cornell.toml");
     let with = |v: &str| src.replacen("[render]\n", &format!("[render]\ntarget_error = {v}\n"), 1);
     let scene = scene::load_str(&with("0.05"), "cornell.toml").unwrap();
     assert_eq!(scene.render.target_error, Some(0.05));

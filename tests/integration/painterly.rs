@@ -1,6 +1,7 @@
 //! Painterly integrator: what it must share with `path`, what must differ, its direction sampler's
 //! density, and determinism. Small images and fixed seeds keep it fast.
 
+use ptui::analysis::stats;
 use ptui::integrator::painterly::bounce::{painterly_direction, painterly_pdf};
 use ptui::math::{luminance, DVec3, Frame};
 use ptui::render::Renderer;
@@ -168,10 +169,7 @@ fn chi_square(
         counts[ti * NP + pi_] += 1;
     }
     // Expected mass per bin: the lobe's share times the indicator, read at the bin's centre.
-    let mut chi2 = 0.0;
-    let mut bins = 0;
-    let mut total_mass = 0.0;
-    let mut outside = 0;
+    let mut expected = vec![0.0; NT * NP];
     for ti in 0..NT {
         for pj in 0..NP {
             let c2 = (ti as f64 + 0.5) / NT as f64;
@@ -179,35 +177,26 @@ fn chi_square(
             let (c, s) = (c2.sqrt(), (1.0 - c2).sqrt());
             let w = frame.to_world(DVec3::new(s * phi.cos(), s * phi.sin(), c));
             // pdf / (cos / pi) is the lobe multiplier: 2 inside, 0 outside.
-            let mass = pdf(w) / (c / PI) * (1.0 / (NT * NP) as f64);
-            total_mass += mass;
-            let o = counts[ti * NP + pj];
-            if mass == 0.0 {
-                outside += o;
-                continue;
-            }
-            let e = mass * SAMPLES as f64;
-            chi2 += (o as f64 - e).powi(2) / e;
-            bins += 1;
+            expected[ti * NP + pj] = pdf(w) / (c / PI) * (1.0 / (NT * NP) as f64);
         }
     }
+    let total_mass: f64 = expected.iter().sum();
     assert!(
         (total_mass - 1.0).abs() < 1e-12,
         "bin masses sum to {total_mass}"
     );
     assert!(dropped <= 1, "{dropped} degenerate bounces");
-    (chi2, bins, outside)
+    // Every bin inside expects 2/256 of a million samples, so none is pooled; the samples in
+    // bins expecting none are returned apart.
+    let observed: Vec<f64> = counts.iter().map(|&o| o as f64).collect();
+    let expected: Vec<f64> = expected.iter().map(|m| m * SAMPLES as f64).collect();
+    let t = stats::pearson_chi2(&observed, &expected);
+    (t.chi2, t.bins, t.stray as u64)
 }
 
-/// The 1 - alpha quantile of chi-square with k degrees of freedom (Wilson-Hilferty).
-fn chi2_quantile(k: f64, z: f64) -> f64 {
-    let a = 2.0 / (9.0 * k);
-    k * (1.0 - a + z * a.sqrt()).powi(3)
-}
-
-/// z for alpha = 1e-4 (one-sided): four cases, a false failure about once in 2500 runs of a
-/// new seed; the seeds are fixed, so the test is deterministic.
-const Z_1E4: f64 = 3.719;
+/// The chi-square quantiles are taken at 1 - 1e-4: four cases, a false failure about once in
+/// 2500 runs of a new seed; the seeds are fixed, so the test is deterministic.
+const ALPHA: f64 = 1e-4;
 
 #[test]
 fn painterly_density_integrates_to_one() {
@@ -257,7 +246,7 @@ fn painterly_directions_follow_their_density() {
             |w| painterly_pdf(n, hemisphere, w),
             seed as u64,
         );
-        let limit = chi2_quantile(bins as f64 - 1.0, Z_1E4);
+        let limit = stats::chi2_quantile(1.0 - ALPHA, bins as f64 - 1.0);
         println!("{n} {hemisphere:?}: chi2 {chi2:.1} (limit {limit:.1}, {bins} bins)");
         assert_eq!(
             outside, 0,
@@ -275,7 +264,7 @@ fn chi_square_rejects_a_wrong_density() {
     // The test can fail: for N = +x the world-z bounce is not the plain cosine lobe.
     let n = DVec3::X;
     let (chi2, bins, outside) = chi_square(n, Hemisphere::WorldZ, |w| n.dot(w).max(0.0) / PI, 9);
-    let limit = chi2_quantile(bins as f64 - 1.0, Z_1E4);
+    let limit = stats::chi2_quantile(1.0 - ALPHA, bins as f64 - 1.0);
     println!("cosine lobe for N = +x: chi2 {chi2:.1} (limit {limit:.1}), {outside} outside");
     assert!(
         chi2 > limit || outside > 0,

@@ -2,9 +2,7 @@
 //! the sphere of directions, compare sample counts with the counts the claimed pdf predicts
 //! (integrated numerically over each bin), and pool sparse bins.
 
-mod common;
-
-use common::{chi2_sf, z_for_two_sided};
+use ptui::analysis::stats;
 use ptui::geometry::{Normals, Sphere};
 use ptui::light::sphere::SphereLight;
 use ptui::material::{Material, MaterialKind};
@@ -106,47 +104,30 @@ fn chi2_test_with(
     }
 }
 
-/// Pearson's test of observed `counts` against `expected` fractions of `n` samples.
+/// Pearson's test of observed `counts` against `expected` fractions of `n` samples, the bins
+/// expecting fewer than 5 samples pooled (the chi-square approximation needs more).
 fn chi2_compare(name: &str, counts: &[f64], expected: &[f64], n: usize) {
-    // Pool bins expecting fewer than 5 samples (the chi-square approximation needs more).
-    let (mut chi2, mut dof, mut pooled_obs, mut pooled_exp) = (0.0, 0usize, 0.0, 0.0);
-    for (obs, frac) in counts.iter().zip(expected) {
-        let exp = frac * n as f64;
-        if exp < 5.0 {
-            pooled_obs += obs;
-            pooled_exp += exp;
-            // A sample where the pdf claims nothing is a hard failure.
-            assert!(
-                !(exp == 0.0 && *obs > 0.0),
-                "{name}: {obs} samples in a bin of zero pdf"
-            );
-        } else {
-            chi2 += (obs - exp).powi(2) / exp;
-            dof += 1;
-        }
-    }
-    if pooled_exp > 0.0 {
-        chi2 += (pooled_obs - pooled_exp).powi(2) / pooled_exp;
-        dof += 1;
-    }
+    let expected: Vec<f64> = expected.iter().map(|frac| frac * n as f64).collect();
+    let t = stats::pearson_chi2(counts, &expected);
+    // A sample where the pdf claims nothing is a hard failure.
     assert!(
-        dof >= 20,
-        "{name}: only {dof} usable bins: the test has no power"
+        t.stray == 0.0,
+        "{name}: {} samples in bins of zero pdf",
+        t.stray
     );
-    let p = chi2_sf(chi2, (dof - 1) as f64);
+    assert!(
+        t.bins >= 20,
+        "{name}: only {} usable bins: the test has no power",
+        t.bins
+    );
+    let p = t.p_value();
     let alpha = 1.0 - (1.0 - ALPHA).powf(1.0 / TESTS);
     assert!(
         p > alpha,
-        "{name}: chi2 = {chi2:.1} with {} dof, p = {p:.2e} < {alpha:.2e}",
-        dof - 1
+        "{name}: chi2 = {:.1} with {} dof, p = {p:.2e} < {alpha:.2e}",
+        t.chi2,
+        t.bins - 1
     );
-}
-
-#[test]
-fn statistics_helpers_match_tables() {
-    assert!((chi2_sf(3.841_458_8, 1.0) - 0.05).abs() < 1e-4);
-    assert!((chi2_sf(18.307_038, 10.0) - 0.05).abs() < 1e-4);
-    assert!((z_for_two_sided(0.05) - 1.959_964).abs() < 1e-3);
 }
 
 #[test]
