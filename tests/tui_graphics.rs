@@ -155,7 +155,10 @@ fn decode_sixel(body: &[u8]) -> (usize, usize, Vec<f32>) {
         while *k < data.len() && data[*k].is_ascii_digit() {
             *k += 1;
         }
-        std::str::from_utf8(&data[start..*k]).unwrap().parse().unwrap()
+        std::str::from_utf8(&data[start..*k])
+            .unwrap()
+            .parse()
+            .unwrap()
     };
     // Raster attributes: "1;1;w;h
     assert_eq!(data[0], b'"');
@@ -221,7 +224,15 @@ fn decode_sixel(body: &[u8]) -> (usize, usize, Vec<f32>) {
     (w, h, rgb)
 }
 
-fn put(index: &mut [Option<u8>], w: usize, h: usize, x: usize, band: usize, bits: u8, colour: usize) {
+fn put(
+    index: &mut [Option<u8>],
+    w: usize,
+    h: usize,
+    x: usize,
+    band: usize,
+    bits: u8,
+    colour: usize,
+) {
     for dy in 0..6 {
         if bits & (1 << dy) != 0 {
             let y = band + dy;
@@ -271,13 +282,20 @@ fn sixel_decodes_to_the_quantised_pixels() {
         // Every pixel decodes to its palette entry, up to the registers' 1% precision.
         let q = sixel::quantise(&rgb);
         assert!(q.palette.len() <= sixel::MAX_COLOURS);
-        let want: Vec<u8> = q.index.iter().flat_map(|&i| q.palette[i as usize]).collect();
+        let want: Vec<u8> = q
+            .index
+            .iter()
+            .flat_map(|&i| q.palette[i as usize])
+            .collect();
         let (worst, _) = errors(&p.rgb, &want);
         assert!(worst <= 255.0 / 200.0 + 1e-3, "{w}x{h}: {worst}");
         // And the palette is close to the image: up to 30000 colours (a gradient over the
         // whole range in two channels, noise of +-4 levels) to 256.
         let (worst, mean) = errors(&p.rgb, &rgb);
-        assert!(worst <= 24.0 && mean <= 6.0, "{w}x{h}: worst {worst}, mean {mean}");
+        assert!(
+            worst <= 24.0 && mean <= 6.0,
+            "{w}x{h}: worst {worst}, mean {mean}"
+        );
         // At most 256 colours are exact (up to the 1% registers), and a flat image is tiny.
         let flat = vec![120u8; w * h * 3];
         let mut out = Vec::new();
@@ -286,9 +304,15 @@ fn sixel_decodes_to_the_quantised_pixels() {
         assert!(placed[0].rgb.iter().all(|v| (v - 120.0).abs() <= 1.3));
         assert!(out.len() < 60 + 8 * h.div_ceil(6), "{} bytes", out.len());
     }
-    let few: Vec<u8> = (0..64 * 64).flat_map(|i| [(i % 200) as u8, 7, (i % 200) as u8 / 2]).collect();
+    let few: Vec<u8> = (0..64 * 64)
+        .flat_map(|i| [(i % 200) as u8, 7, (i % 200) as u8 / 2])
+        .collect();
     let q = sixel::quantise(&few);
-    let back: Vec<f32> = q.index.iter().flat_map(|&i| q.palette[i as usize].map(|v| v as f32)).collect();
+    let back: Vec<f32> = q
+        .index
+        .iter()
+        .flat_map(|&i| q.palette[i as usize].map(|v| v as f32))
+        .collect();
     assert_eq!(errors(&back, &few).0, 0.0, "200 colours are kept exactly");
 }
 
@@ -319,7 +343,10 @@ fn scene(x: u32, y: u32) -> [f32; 3] {
 
 /// Paint every placed image onto a screen of `cols` x `rows` cells of `cell` pixels.
 fn screen(placed: &[Placed], cols: u16, rows: u16, cell: (u16, u16)) -> Vec<Option<[f32; 3]>> {
-    let (sw, sh) = (cols as usize * cell.0 as usize, rows as usize * cell.1 as usize);
+    let (sw, sh) = (
+        cols as usize * cell.0 as usize,
+        rows as usize * cell.1 as usize,
+    );
     let mut px = vec![None; sw * sh];
     for p in placed {
         let x0 = (p.col - 1) as usize * cell.0 as usize;
@@ -414,7 +441,11 @@ fn only_changed_tiles_are_resent() {
         assert_eq!(placed.len(), 1, "{protocol:?}");
         assert_eq!((placed[0].row, placed[0].col), (1, 1));
         if protocol == Protocol::Kitty {
-            assert_eq!(placed[0].id, Some(1), "the same image id replaces the old tile");
+            assert_eq!(
+                placed[0].id,
+                Some(1),
+                "the same image id replaces the old tile"
+            );
         }
         // Changes below the hysteresis are not sent.
         let faint = |x, y| {
@@ -457,7 +488,9 @@ fn steady_state_bytes_stay_within_the_budget() {
         let t0 = Instant::now();
         let noisy = |frame: u32| {
             snapshot(320, 240, move |x, y| {
-                let h = (x.wrapping_mul(73856093) ^ y.wrapping_mul(19349663) ^ frame.wrapping_mul(83492791))
+                let h = (x.wrapping_mul(73856093)
+                    ^ y.wrapping_mul(19349663)
+                    ^ frame.wrapping_mul(83492791))
                     % 1000;
                 let s = scene(x / 5, y / 5);
                 s.map(|v| v * (0.7 + 0.6 * h as f32 / 1000.0))
@@ -472,7 +505,11 @@ fn steady_state_bytes_stay_within_the_budget() {
         for f in 1..=300u32 {
             pic.update(&noisy(f), area, &view, 1.0, Tonemap::Aces);
             out.clear();
-            total += pic.emit(&mut out, t0 + Duration::from_millis(f as u64 * 1000 / 30), false);
+            total += pic.emit(
+                &mut out,
+                t0 + Duration::from_millis(f as u64 * 1000 / 30),
+                false,
+            );
         }
         let rate = total as f64 / 10.0;
         // The budget, plus at most one tile of overdraw.
@@ -480,6 +517,9 @@ fn steady_state_bytes_stay_within_the_budget() {
             rate <= BYTES_PER_SECOND * 1.05 + 30_000.0 / 10.0,
             "{protocol:?}: {rate:.0} B/s"
         );
-        assert!(rate > BYTES_PER_SECOND * 0.5, "{protocol:?}: {rate:.0} B/s: the budget is used");
+        assert!(
+            rate > BYTES_PER_SECOND * 0.5,
+            "{protocol:?}: {rate:.0} B/s: the budget is used"
+        );
     }
 }

@@ -115,7 +115,12 @@ impl Geometry {
 
     /// Film pixel range [x0, x1) x [y0, y1) averaged by image sub-pixel (i, j): the box filter.
     #[inline]
-    pub(crate) fn footprint(&self, i: u16, j: u16, film: (u32, u32)) -> (usize, usize, usize, usize) {
+    pub(crate) fn footprint(
+        &self,
+        i: u16,
+        j: u16,
+        film: (u32, u32),
+    ) -> (usize, usize, usize, usize) {
         let span = |o: f64, s: f64, k: u16, n: u32| {
             let a = ((o + k as f64 * s).floor().max(0.0) as usize).min(n as usize - 1);
             let b = ((o + (k + 1) as f64 * s).floor() as usize).clamp(a + 1, n as usize);

@@ -298,7 +298,9 @@ impl Picture {
         let t = &self.tiles[k];
         let mut px = Vec::with_capacity((t.x1 - t.x0) * (t.y1 - t.y0) * 3);
         for y in t.y0..t.y1 {
-            px.extend_from_slice(&self.rgb[(y * self.grid.0 + t.x0) * 3..(y * self.grid.0 + t.x1) * 3]);
+            px.extend_from_slice(
+                &self.rgb[(y * self.grid.0 + t.x0) * 3..(y * self.grid.0 + t.x1) * 3],
+            );
         }
         px
     }
@@ -306,16 +308,26 @@ impl Picture {
 
 /// The tiles covering the image: whole cells, so each can be placed at a cell; a cell the
 /// image only partly covers shows black in the rest.
-fn tiles(area: Rect, cell: (u16, u16), scale: u16, g: &Geometry, grid: (usize, usize)) -> Vec<Tile> {
+fn tiles(
+    area: Rect,
+    cell: (u16, u16),
+    scale: u16,
+    g: &Geometry,
+    grid: (usize, usize),
+) -> Vec<Tile> {
     let (cw, ch) = (cell.0 as usize, cell.1 as usize);
     let d = scale as usize;
     // Grid pixel where cell column c (row r) starts.
     let gx = |c: usize| (c * cw / d).min(grid.0);
     let gy = |r: usize| (r * ch / d).min(grid.1);
     let c0 = g.off.0 as usize * d / cw;
-    let c1 = ((g.off.0 + g.size.0) as usize * d).div_ceil(cw).min(area.width as usize);
+    let c1 = ((g.off.0 + g.size.0) as usize * d)
+        .div_ceil(cw)
+        .min(area.width as usize);
     let r0 = g.off.1 as usize * d / ch;
-    let r1 = ((g.off.1 + g.size.1) as usize * d).div_ceil(ch).min(area.height as usize);
+    let r1 = ((g.off.1 + g.size.1) as usize * d)
+        .div_ceil(ch)
+        .min(area.height as usize);
     let mut out = Vec::new();
     for row in (r0..r1).step_by(TILE_ROWS as usize) {
         let row_end = (row + TILE_ROWS as usize).min(r1);
