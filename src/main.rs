@@ -33,6 +33,7 @@ fn main() {
                 color: cli.tui.color,
                 fps: cli.tui.fps,
                 halfblock: !cli.tui.spaces,
+                graphics: cli.tui.graphics,
                 bench_log: cli.tui.bench_log.clone(),
                 resume,
             })

@@ -1,6 +1,7 @@
 //! Flags of the TUI (`ptui [SCENE]`), besides the render settings every command shares.
 
 use crate::tui::color::ColorChoice;
+use crate::tui::graphics::GraphicsChoice;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -15,6 +16,10 @@ pub struct TuiArgs {
     /// Draw the preview with coloured spaces only, for terminals that draw '▀' double-width.
     #[arg(long)]
     pub spaces: bool,
+    /// Preview as real pixels: auto asks the terminal (kitty graphics, then sixel; half-blocks
+    /// if it does not answer in 200 ms, e.g. inside tmux).
+    #[arg(long, value_enum, default_value_t = GraphicsChoice::Auto)]
+    pub graphics: GraphicsChoice,
     /// Measuring harness: log terminal bytes per second and key latencies to this file.
     #[arg(long, hide = true)]
     pub bench_log: Option<PathBuf>,

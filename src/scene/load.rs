@@ -487,7 +487,7 @@ fn focus_camera(
         (Some(f), None) => f.get_ref().0,
         (None, Some(on)) => {
             let z = (DVec3::from_array(on.get_ref().0) - camera.position).dot(camera.forward);
-            if !(z > 0.0) {
+            if z.is_nan() || z <= 0.0 {
                 return Err(SceneError::at(
                     file,
                     src,

@@ -38,6 +38,8 @@ pub struct Request {
     pub fresh: bool,
 }
 
+// A command is sent once per keypress or job, so a boxed request would save nothing measurable.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
 pub enum Command {
     Start(Request),

@@ -3,6 +3,7 @@
 
 use super::color::{ColorChoice, ColorMode};
 use super::form::{Field, Form, Shown};
+use super::graphics::Picture;
 use super::layout::layout;
 use super::preview::{PreviewCache, ViewState};
 use super::save::SaveKind;
@@ -15,6 +16,8 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A side effect for the main loop to carry out.
+// One action per keypress: the size of the request it may carry does not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, PartialEq)]
 pub enum Action {
     Start(Request),
@@ -55,6 +58,9 @@ pub struct App {
     pub show_chart: bool,
     pub view: ViewState,
     pub preview: PreviewCache,
+    /// The preview as real pixels (kitty graphics or sixel), when the terminal shows them; the
+    /// cell preview is then not computed.
+    pub graphics: Option<Picture>,
     /// When the preview was last recomputed and how long that took (for mid-pass refreshes).
     preview_at: Option<(Instant, Duration)>,
     pub size: Rect,
@@ -96,6 +102,7 @@ impl App {
             show_chart: false,
             view: ViewState::default(),
             preview: PreviewCache::default(),
+            graphics: None,
             preview_at: None,
             size: Rect::new(0, 0, 80, 24),
             history: Vec::new(),
@@ -148,15 +155,33 @@ impl App {
         };
         let s = self.settings();
         let started = Instant::now();
-        self.preview.update(
-            &snap,
-            area,
-            &self.view,
-            self.halfblock,
-            s.exposure,
-            s.tonemap,
-        );
+        match &mut self.graphics {
+            Some(g) => g.update(&snap, area, &self.view, s.exposure, s.tonemap),
+            None => self.preview.update(
+                &snap,
+                area,
+                &self.view,
+                self.halfblock,
+                s.exposure,
+                s.tonemap,
+            ),
+        }
         self.preview_at = Some((started, started.elapsed()));
+    }
+
+    /// The geometry of the preview as shown (graphics pixels or cell sub-pixels), if any.
+    pub fn geometry(&self) -> Option<super::preview::Geometry> {
+        match &self.graphics {
+            Some(g) => g.geometry(),
+            None => self.preview.geometry(),
+        }
+    }
+
+    /// Preview pixels that changed at the last recompute.
+    fn preview_changed(&self) -> usize {
+        self.graphics
+            .as_ref()
+            .map_or(self.preview.changed, |g| g.changed)
     }
 
     /// Recompute the preview from the film's image as it is now, if the render is running and
@@ -175,7 +200,7 @@ impl App {
             return false;
         }
         self.refresh_preview(None);
-        self.preview.changed > 0
+        self.preview_changed() > 0
     }
 
     /// Apply the newest snapshot received since the last frame, if any.
@@ -428,7 +453,7 @@ impl App {
     }
 
     fn zoom(&mut self, zoom_in: bool) {
-        let Some(g) = self.preview.geometry() else {
+        let Some(g) = self.geometry() else {
             return;
         };
         if zoom_in && g.can_zoom_in(&self.view) {
@@ -443,7 +468,7 @@ impl App {
 
     /// Move the viewport by an eighth of its size (at least one sub-pixel) per key press.
     fn pan(&mut self, dx: i32, dy: i32) {
-        let Some(g) = self.preview.geometry() else {
+        let Some(g) = self.geometry() else {
             return;
         };
         let (cx, cy) = g.center();

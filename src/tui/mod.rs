@@ -12,6 +12,7 @@ pub mod color;
 pub mod dither;
 pub mod event;
 pub mod form;
+pub mod graphics;
 pub mod layout;
 pub mod preview;
 pub mod save;
@@ -26,6 +27,7 @@ use color::ColorChoice;
 use crossterm::queue;
 use crossterm::terminal::{BeginSynchronizedUpdate, EndSynchronizedUpdate};
 use event::Event;
+use graphics::GraphicsChoice;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;
@@ -40,6 +42,8 @@ pub struct TuiOptions {
     pub color: ColorChoice,
     pub fps: u32,
     pub halfblock: bool,
+    /// Real pixels (kitty graphics, sixel) when the terminal shows them.
+    pub graphics: GraphicsChoice,
     /// Append a line per second with bytes written to the terminal and render progress, and a
     /// line per key press with its key-to-flush latency (for the measuring harness).
     pub bench_log: Option<PathBuf>,
@@ -80,6 +84,19 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
     }
 
     let mut guard = term::TermGuard::enter().context("cannot set up the terminal")?;
+    // Ask the terminal before the input thread reads stdin, so no reply is taken for a key.
+    let support = match opts.graphics {
+        GraphicsChoice::Auto => graphics::detect::query(graphics::QUERY_TIMEOUT).ok(),
+        _ => None,
+    };
+    if let Some(protocol) = graphics::choose(opts.graphics, support.as_ref()) {
+        let cell = graphics::detect::cell_size()
+            .or(support.and_then(|s| s.cell))
+            .unwrap_or(graphics::DEFAULT_CELL);
+        app.graphics = Some(graphics::Picture::new(protocol, cell));
+        // Pixels need no colour hint.
+        app.color_hint = false;
+    }
     event::spawn_input(tx.clone())?;
     event::spawn_tick(tx.clone(), Duration::from_millis(250))?;
     event::spawn_signals(tx.clone())?;
@@ -99,7 +116,7 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
         let due = last_draw.is_none_or(|t| t.elapsed() >= frame_time);
         if urgent || (dirty && due) {
             app.apply_pending();
-            if let Err(e) = draw(&mut guard.terminal, &app) {
+            if let Err(e) = draw(&mut guard.terminal, &mut app) {
                 break Err(e.into());
             }
             let now = Instant::now();
@@ -110,7 +127,8 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
             }
             keys.clear();
             last_draw = Some(now);
-            dirty = false;
+            // Tiles held back by the bandwidth budget go out at the next frames.
+            dirty = app.graphics.as_ref().is_some_and(|g| g.pending());
             urgent = false;
         }
         let wait = match last_draw {
@@ -150,6 +168,12 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                     }
                 }
                 Event::Resize(w, h) => {
+                    // The font may have changed with the window.
+                    if let (Some(g), Some(cell)) =
+                        (app.graphics.as_mut(), graphics::detect::cell_size())
+                    {
+                        g.set_cell(cell);
+                    }
                     app.resize(w, h);
                     urgent = true;
                 }
@@ -218,10 +242,19 @@ fn film_path(app: &App) -> PathBuf {
     .with_extension("film")
 }
 
-/// One frame inside a synchronized update.
-fn draw(terminal: &mut term::Term, app: &App) -> std::io::Result<()> {
+/// One frame inside a synchronized update: the cells, then the preview's pixels if graphics
+/// are on (the preview's cells are blank then, so the cell diff never overwrites them).
+fn draw(terminal: &mut term::Term, app: &mut App) -> std::io::Result<()> {
     queue!(terminal.backend_mut(), BeginSynchronizedUpdate)?;
     terminal.draw(|f| view::draw(f, app))?;
+    let overlay = app.show_help
+        || app.show_details
+        || layout::layout(app.size, app.show_chart).preview.is_none();
+    if let Some(g) = app.graphics.as_mut() {
+        let mut out = Vec::new();
+        g.emit(&mut out, Instant::now(), overlay);
+        terminal.backend_mut().write_all(&out)?;
+    }
     queue!(terminal.backend_mut(), EndSynchronizedUpdate)?;
     terminal.backend_mut().flush()
 }

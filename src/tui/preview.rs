@@ -58,8 +58,18 @@ impl Geometry {
         let per_cell: u16 = if halfblock { 2 } else { 1 };
         // Vertical film pixels per sub-pixel over horizontal ones: cells are ~1:2.
         let q = if halfblock { 1.0 } else { 2.0 };
-        let cols = area.width.max(1) as f64;
-        let rows = (area.height as f64 * per_cell as f64).max(1.0);
+        let grid = (area.width, area.height.saturating_mul(per_cell));
+        let mut g = Geometry::for_grid(film, grid, q, view);
+        g.per_cell = per_cell;
+        g
+    }
+
+    /// Fit a `film` into a grid of `grid` sub-pixels, each `q` times as tall as wide (in film
+    /// pixels), at `view`'s zoom and pan. The graphics preview uses it with square pixels.
+    pub fn for_grid(film: (u32, u32), grid: (u16, u16), q: f64, view: &ViewState) -> Geometry {
+        let per_cell = 1;
+        let cols = grid.0.max(1) as f64;
+        let rows = (grid.1 as f64).max(1.0);
         let (w, h) = (film.0 as f64, film.1 as f64);
         let fit = (w / cols).max(h / (q * rows));
         let sx = (fit / 2f64.powi(view.zoom as i32)).max(fit.min(1.0));
@@ -67,7 +77,7 @@ impl Geometry {
         let size_x = cols.min((w / sx).ceil()) as u16;
         let size_y = rows.min((h / sy).ceil()) as u16;
         let off = (
-            (area.width.saturating_sub(size_x)) / 2,
+            (grid.0.saturating_sub(size_x)) / 2,
             ((rows as u16).saturating_sub(size_y)) / 2,
         );
         let (vw, vh) = (size_x as f64 * sx, size_y as f64 * sy);
@@ -105,7 +115,12 @@ impl Geometry {
 
     /// Film pixel range [x0, x1) x [y0, y1) averaged by image sub-pixel (i, j): the box filter.
     #[inline]
-    fn footprint(&self, i: u16, j: u16, film: (u32, u32)) -> (usize, usize, usize, usize) {
+    pub(crate) fn footprint(
+        &self,
+        i: u16,
+        j: u16,
+        film: (u32, u32),
+    ) -> (usize, usize, usize, usize) {
         let span = |o: f64, s: f64, k: u16, n: u32| {
             let a = ((o + k as f64 * s).floor().max(0.0) as usize).min(n as usize - 1);
             let b = ((o + (k + 1) as f64 * s).floor() as usize).clamp(a + 1, n as usize);

@@ -78,7 +78,9 @@ impl Drop for TermGuard {
 /// Leave the alternate screen, show the cursor, cooked mode. Safe to call more than once.
 pub fn restore() {
     let mut out = io::stdout();
-    let _ = execute!(out, EndSynchronizedUpdate, LeaveAlternateScreen, Show);
+    let _ = execute!(out, EndSynchronizedUpdate);
+    let _ = out.write_all(super::graphics::cleanup());
+    let _ = execute!(out, LeaveAlternateScreen, Show);
     let _ = disable_raw_mode();
     let _ = out.flush();
 }

@@ -40,8 +40,11 @@ pub fn draw(frame: &mut Frame, app: &App) {
     draw_title(frame, app, areas.title);
     draw_form(frame, app, areas.form);
     if app.snapshot.is_some() {
-        app.preview
-            .draw(frame.buffer_mut(), preview, app.color_mode);
+        // Graphics: the cells stay blank, the main loop sends the pixels after the frame.
+        if app.graphics.is_none() {
+            app.preview
+                .draw(frame.buffer_mut(), preview, app.color_mode);
+        }
     } else {
         frame.render_widget(Paragraph::new("starting…").dark_gray(), preview);
     }
@@ -72,19 +75,20 @@ fn state_name(app: &App) -> &'static str {
 
 fn draw_title(frame: &mut Frame, app: &App, area: Rect) {
     let s = app.settings();
-    let zoom = match app.preview.geometry() {
+    let zoom = match app.geometry() {
         Some(g) if g.sx <= 1.0 && app.view.zoom > 0 => "1:1".to_string(),
         _ if app.view.zoom == 0 => "fit".into(),
         _ => format!("{}x", 1u32 << app.view.zoom),
     };
-    let mode = match app.color_mode {
-        super::color::ColorMode::Truecolor => "truecolor",
-        super::color::ColorMode::Ansi256 => "256 colours",
+    let mode = match (&app.graphics, app.color_mode) {
+        (Some(g), _) => g.protocol.name(),
+        (None, super::color::ColorMode::Truecolor) => "truecolor",
+        (None, super::color::ColorMode::Ansi256) => "256 colours",
     };
-    let shape = if app.halfblock {
-        "half-block"
-    } else {
-        "spaces"
+    let shape = match (&app.graphics, app.halfblock) {
+        (Some(_), _) => "pixels",
+        (None, true) => "half-block",
+        (None, false) => "spaces",
     };
     let help = "? help  i details ";
     let room = if area.width >= 60 {
@@ -599,6 +603,16 @@ fn draw_details(frame: &mut Frame, app: &App, area: Rect) {
         (super::color::ColorMode::Truecolor, _) => "truecolor".to_string(),
         (_, super::color::ColorChoice::Auto) => COLOR_HINTS[0].to_string(),
         _ => "256 colours (c for truecolor)".to_string(),
+    };
+    let colours = match &app.graphics {
+        Some(g) => format!(
+            "{} pixels; cells of {}x{} px, {} screen pixel(s) per image pixel",
+            g.protocol.name(),
+            g.cell.0,
+            g.cell.1,
+            g.scale()
+        ),
+        None => colours,
     };
     rows.push(("preview", colours));
 

@@ -27,4 +27,5 @@ mod sampling_chi2;
 mod scene_errors;
 mod shard;
 mod smooth;
+mod tui_graphics;
 mod tui_preview;
