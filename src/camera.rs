@@ -85,7 +85,14 @@ impl Camera {
     /// mapped to the disc by Shirley's concentric map, which keeps stratification). A pinhole
     /// ignores `u`.
     #[inline]
-    pub fn ray_through_lens(&self, width: u32, height: u32, fx: f64, fy: f64, u: (f64, f64)) -> Ray {
+    pub fn ray_through_lens(
+        &self,
+        width: u32,
+        height: u32,
+        fx: f64,
+        fy: f64,
+        u: (f64, f64),
+    ) -> Ray {
         if !self.has_lens() {
             return self.ray(width, height, fx, fy);
         }
@@ -202,7 +209,9 @@ mod tests {
                 let (lx, ly) = warp::concentric_disk((rng.next_f64(), rng.next_f64()));
                 let lens = c.position + (c.right * lx + c.up * ly) * c.aperture;
                 let d = (q - lens).normalize();
-                let on_plane = lens + d * ((c.focus_distance - (lens - c.position).dot(c.forward)) / d.dot(c.forward));
+                let on_plane = lens
+                    + d * ((c.focus_distance - (lens - c.position).dot(c.forward))
+                        / d.dot(c.forward));
                 let centre = c.position + (q - c.position) * (c.focus_distance / z);
                 far = far.max((on_plane - centre).length());
             }
@@ -217,7 +226,10 @@ mod tests {
         let c = lens_camera().with_lens(0.0, 7.0);
         let a = c.ray(320, 240, 17.25, 100.5);
         let b = c.ray_through_lens(320, 240, 17.25, 100.5, (0.3, 0.9));
-        assert_eq!((a.o.to_array(), a.d.to_array()), (b.o.to_array(), b.d.to_array()));
+        assert_eq!(
+            (a.o.to_array(), a.d.to_array()),
+            (b.o.to_array(), b.d.to_array())
+        );
     }
 
     #[test]

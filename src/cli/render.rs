@@ -393,8 +393,8 @@ pub fn summary(r: &Renderer) -> String {
     let st = r.stats();
     let err = r.error_estimate();
     format!(
-        "{name}: {w}x{h}, {spp}, {integ} integrator, seed {seed}, {threads} threads, {code} \
-         code\n\
+        "{name}: {w}x{h}, {spp}, {integ} integrator, {lens}, seed {seed}, {threads} threads, \
+         {code} code\n\
          time {time:.2} s (scene build {build:.1} ms), {rate:.2} M samples/s, {rays:.1} M rays, \
          invalid samples {invalid}\n\
          {report}; caustics: {caustics}{light_paths}\n\
@@ -409,6 +409,11 @@ pub fn summary(r: &Renderer) -> String {
             IntegratorKind::Painterly => format!("painterly ({})", s.painterly),
             kind => kind.name().to_string(),
         },
+        lens = lens_text(
+            &r.scene
+                .camera
+                .with_lens_settings(s.aperture, s.focus_distance)
+        ),
         seed = s.seed,
         threads = r.threads(),
         code = crate::cpu::ShadingCode::detect().name(),
@@ -433,6 +438,18 @@ pub fn summary(r: &Renderer) -> String {
         rel = err.relative(),
         stop = stop_reason(r),
     )
+}
+
+/// The camera's lens for the summary: "pinhole", or the lens radius and focus distance.
+fn lens_text(camera: &crate::camera::Camera) -> String {
+    if camera.has_lens() {
+        format!(
+            "thin lens (radius {}, focused at {:.4})",
+            camera.aperture, camera.focus_distance
+        )
+    } else {
+        "pinhole".into()
+    }
 }
 
 /// Passes, and with adaptive sampling the samples per pixel they came to on average.

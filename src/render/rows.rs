@@ -63,12 +63,17 @@ pub(super) fn camera_sample(
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, sample);
     let (jx, jy) = sampler.get_2d();
-    let ray = scene.camera.ray(
-        settings.width,
-        settings.height,
-        x as f64 + jx,
-        y as f64 + jy,
-    );
+    let (fx, fy) = (x as f64 + jx, y as f64 + jy);
+    let camera = scene
+        .camera
+        .with_lens_settings(settings.aperture, settings.focus_distance);
+    // A pinhole draws no lens dimensions, so its images stay what they were before lenses.
+    let ray = if camera.has_lens() {
+        let u = sampler.get_2d();
+        camera.ray_through_lens(settings.width, settings.height, fx, fy, u)
+    } else {
+        camera.ray(settings.width, settings.height, fx, fy)
+    };
     (ray, sampler)
 }
 

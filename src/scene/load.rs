@@ -493,7 +493,9 @@ fn focus_camera(
                     src,
                     Some(on.span()),
                     Some("camera.focus_on".into()),
-                    format!("the point is not in front of the camera (distance {z:e} along the view)"),
+                    format!(
+                        "the point is not in front of the camera (distance {z:e} along the view)"
+                    ),
                 ));
             }
             z
@@ -508,7 +510,10 @@ fn focus_camera(
 pub fn default_focus(camera: &Camera, accel: &Accel, prims: &[Primitive]) -> f64 {
     // The centre ray starts `near` along the view like every camera ray (smallpt's starts
     // past its front wall).
-    let ray = Ray::new(camera.position + camera.forward * camera.near, camera.forward);
+    let ray = Ray::new(
+        camera.position + camera.forward * camera.near,
+        camera.forward,
+    );
     if let Some(hit) = accel.intersect(prims, &ray, f64::INFINITY) {
         return camera.near + hit.t;
     }

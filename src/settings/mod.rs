@@ -267,7 +267,9 @@ impl RenderSettings {
         self.painterly.validate()?;
         if let Some(a) = self.aperture {
             if !(a.is_finite() && (0.0..=MAX).contains(&a)) {
-                return Err(format!("aperture must be a number between 0 and {MAX:e}, got {a}"));
+                return Err(format!(
+                    "aperture must be a number between 0 and {MAX:e}, got {a}"
+                ));
             }
         }
         if let Some(f) = self.focus_distance {

@@ -19,6 +19,7 @@ mod furnace;
 mod fuzz_obj;
 mod fuzz_scene;
 mod invariance_power;
+mod lens;
 mod mesh;
 mod painterly;
 mod ray_count;

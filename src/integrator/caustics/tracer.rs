@@ -65,6 +65,14 @@ impl CausticTracer {
         if settings.max_depth.is_some() {
             return Err("path-traced (a depth limit is set)".into());
         }
+        let lens = scene
+            .camera
+            .with_lens_settings(settings.aperture, settings.focus_distance);
+        if lens.has_lens() {
+            // Its splats are projected through a pinhole; through a lens a light vertex reaches
+            // a disc of pixels, which the joins do not sample.
+            return Err("path-traced (a thin-lens camera)".into());
+        }
         if scene.lights.is_empty() {
             return Err("none (no emitters)".into());
         }
