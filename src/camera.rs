@@ -75,6 +75,18 @@ impl Camera {
         )
     }
 
+    /// The lens in words, for summaries: "pinhole", or its radius and focus distance.
+    pub fn lens_text(&self) -> String {
+        if self.has_lens() {
+            format!(
+                "thin lens (radius {}, focused at {:.4})",
+                self.aperture, self.focus_distance
+            )
+        } else {
+            "pinhole".into()
+        }
+    }
+
     /// Whether rays start on a lens (and so need two sample dimensions for it).
     #[inline(always)]
     pub fn has_lens(&self) -> bool {

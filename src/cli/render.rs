@@ -409,11 +409,11 @@ pub fn summary(r: &Renderer) -> String {
             IntegratorKind::Painterly => format!("painterly ({})", s.painterly),
             kind => kind.name().to_string(),
         },
-        lens = lens_text(
-            &r.scene
-                .camera
-                .with_lens_settings(s.aperture, s.focus_distance)
-        ),
+        lens = r
+            .scene
+            .camera
+            .with_lens_settings(s.aperture, s.focus_distance)
+            .lens_text(),
         seed = s.seed,
         threads = r.threads(),
         code = crate::cpu::ShadingCode::detect().name(),
@@ -438,18 +438,6 @@ pub fn summary(r: &Renderer) -> String {
         rel = err.relative(),
         stop = stop_reason(r),
     )
-}
-
-/// The camera's lens for the summary: "pinhole", or the lens radius and focus distance.
-fn lens_text(camera: &crate::camera::Camera) -> String {
-    if camera.has_lens() {
-        format!(
-            "thin lens (radius {}, focused at {:.4})",
-            camera.aperture, camera.focus_distance
-        )
-    } else {
-        "pinhole".into()
-    }
 }
 
 /// Passes, and with adaptive sampling the samples per pixel they came to on average.

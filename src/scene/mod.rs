@@ -75,6 +75,15 @@ impl Scene {
             .map(|h| self.shade(h))
     }
 
+    /// Depth along the view of the first surface the pinhole ray through film position
+    /// (`fx`, `fy`) hits: the focus distance that makes it sharp. None when the ray hits nothing.
+    pub fn depth_at(&self, width: u32, height: u32, fx: f64, fy: f64) -> Option<f64> {
+        let ray = self.camera.ray(width, height, fx, fy);
+        let hit = self.accel.intersect(&self.prims, &ray, f64::INFINITY)?;
+        let z = (ray.o + ray.d * hit.t - self.camera.position).dot(self.camera.forward);
+        (z > 0.0 && z.is_finite()).then_some(z)
+    }
+
     /// Whether any primitive has vertex normals.
     pub fn has_shading_normals(&self) -> bool {
         !self.shading.is_empty()

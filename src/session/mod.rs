@@ -92,6 +92,8 @@ pub enum SessionEvent {
         settings: RenderSettings,
         scene_render: SettingsOverrides,
         scene_name: String,
+        /// The scene rendered (shared, immutable): the TUI reads its camera (lens fields, focus).
+        scene: Arc<Scene>,
         notes: BuildNotes,
         threads: usize,
     },
@@ -392,6 +394,7 @@ impl Worker {
             settings,
             scene_render: scene.render.clone(),
             scene_name: scene.name.clone(),
+            scene: scene.clone(),
             notes: BuildNotes {
                 accel: scene.report.accel.clone(),
                 light_sampling: scene.report.light_sampling.clone(),

@@ -7,6 +7,7 @@ use super::graphics::Picture;
 use super::layout::layout;
 use super::preview::{PreviewCache, ViewState};
 use super::save::SaveKind;
+use crate::scene::Scene;
 use crate::session::{BuildNotes, JobStatus, Request, SessionEvent, Snapshot};
 use crate::settings::{RenderSettings, SettingsOverrides};
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
@@ -43,6 +44,8 @@ pub struct App {
     pub scene_name: String,
     /// What the scene build and the renderer chose (accelerator, light sampling, caustics).
     pub notes: BuildNotes,
+    /// The scene the worker last started (its camera gives the lens fields and the focus key).
+    pub scene: Option<Arc<Scene>>,
     pub threads: usize,
     pub snapshot: Option<Arc<Snapshot>>,
     /// A snapshot received but not yet turned into preview colours (done once per frame).
@@ -91,6 +94,7 @@ impl App {
             scene_render: SettingsOverrides::default(),
             scene_name: scene,
             notes: BuildNotes::default(),
+            scene: None,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             snapshot: None,
             pending: None,
@@ -231,10 +235,12 @@ impl App {
                 settings: _,
                 scene_render,
                 scene_name,
+                scene,
                 notes,
                 threads,
                 ..
             } => {
+                self.scene = Some(scene);
                 self.scene_render = scene_render;
                 self.scene_name = scene_name;
                 self.notes = notes;
@@ -295,6 +301,44 @@ impl App {
         true
     }
 
+    /// The scene camera's lens radius and focus distance ((0, 0) before a scene is loaded).
+    pub fn lens(&self) -> (f64, f64) {
+        self.scene
+            .as_ref()
+            .map_or((0.0, 0.0), |s| (s.camera.aperture, s.camera.focus_distance))
+    }
+
+    /// `F`: focus on the surface under the preview's centre (the film's centre, or where the
+    /// zoomed view is panned to), and restart the render.
+    fn focus_on_centre(&mut self) -> Option<Action> {
+        let scene = self.scene.clone()?;
+        let s = self.settings();
+        let (fx, fy) = self
+            .view
+            .center
+            .unwrap_or((s.width as f64 / 2.0, s.height as f64 / 2.0));
+        match scene.depth_at(s.width, s.height, fx, fy) {
+            Some(z) => {
+                self.form.overrides.focus_distance = Some(z);
+                let hint = if s.aperture.unwrap_or(scene.camera.aperture) > 0.0 {
+                    String::new()
+                } else {
+                    " (a pinhole is sharp everywhere: set an aperture to see it)".into()
+                };
+                self.message = Some(Message::Info(format!(
+                    "focus at {z:.4} (pixel {fx:.0}, {fy:.0}){hint}"
+                )));
+                self.changed(Field::Focus)
+            }
+            None => {
+                self.message = Some(Message::Error(format!(
+                    "focus: nothing under pixel ({fx:.0}, {fy:.0}) to focus on"
+                )));
+                None
+            }
+        }
+    }
+
     pub fn on_saved(&mut self, result: Result<PathBuf, String>) {
         self.message = Some(match result {
             Ok(p) => Message::Info(format!("saved {}", p.display())),
@@ -307,6 +351,7 @@ impl App {
             settings,
             color_mode: self.color_mode,
             threads: self.threads,
+            lens: self.lens(),
         };
         self.form.edit_text(self.form.field(), &now)
     }
@@ -345,6 +390,7 @@ impl App {
                         settings: &s,
                         color_mode: self.color_mode,
                         threads: self.threads,
+                        lens: self.lens(),
                     };
                     self.form.cycle(field, &now);
                     return self.changed(field);
@@ -371,6 +417,7 @@ impl App {
                 self.halfblock = !self.halfblock;
                 self.refresh_preview(None);
             }
+            KeyCode::Char('F') => return self.focus_on_centre(),
             KeyCode::Char('g') => {
                 self.show_chart = !self.show_chart;
                 self.refresh_preview(None);
@@ -482,6 +529,7 @@ impl App {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::DVec3;
     use crate::sampling::SamplerKind;
     use crate::session::{Command, SessionHandle};
     use crate::settings::{Hemisphere, IntegratorKind};
@@ -655,6 +703,65 @@ mod tests {
     }
 
     #[test]
+    fn the_focus_key_focuses_on_the_surface_under_the_preview_centre() {
+        let mut app = small_app();
+        // No scene yet: nothing to focus on, nothing sent.
+        assert!(press(&mut app, &[KeyCode::Char('F')]).is_empty());
+        let scene = Arc::new(crate::scene::load("cornell").expect("built-in"));
+        app.on_worker(SessionEvent::Started {
+            request: 0,
+            job: 0,
+            restarted: true,
+            settings: app.settings(),
+            scene_render: SettingsOverrides::default(),
+            scene_name: "cornell".into(),
+            scene: scene.clone(),
+            notes: BuildNotes::default(),
+            threads: 1,
+        });
+        // The film's centre sees the back wall, at the scene's default focus distance.
+        let reqs = press(&mut app, &[KeyCode::Char('F')]);
+        let z = reqs[0].form.focus_distance.expect("focus set");
+        assert!((z - scene.camera.focus_distance).abs() < 1e-9, "{z}");
+        assert!((z - 295.6).abs() < 1.0, "{z}");
+        // Panned onto the mirror ball (centre (27, 16.5, 47), radius 16.5): its front, nearer.
+        let (fx, fy) = scene
+            .camera
+            .raster(
+                16,
+                12,
+                (DVec3::new(27.0, 16.5, 63.5) - scene.camera.position).normalize(),
+            )
+            .expect("on the image");
+        app.view.center = Some((fx, fy));
+        let reqs = press(&mut app, &[KeyCode::Char('F')]);
+        let z = reqs[0].form.focus_distance.expect("focus set");
+        assert!((z - (295.6 - 63.5)).abs() < 3.0, "{z}");
+        // The lens fields show and take values; "scene" goes back to the camera's.
+        assert_eq!(app.lens(), (0.0, scene.camera.focus_distance));
+        app.form.selected = Field::Aperture;
+        let reqs = press(
+            &mut app,
+            &[
+                KeyCode::Enter,
+                KeyCode::Backspace,
+                KeyCode::Char('2'),
+                KeyCode::Enter,
+            ],
+        );
+        assert_eq!(reqs[0].form.aperture, Some(2.0));
+        app.form.selected = Field::Focus;
+        let mut keys = vec![KeyCode::Enter];
+        keys.extend([KeyCode::Backspace; 12]);
+        keys.extend(typed("scene"));
+        keys.push(KeyCode::Enter);
+        let reqs = press(&mut app, &keys);
+        assert_eq!(reqs[0].form.focus_distance, None);
+        assert!(app.form.commit(Field::Focus, "0").is_err());
+        assert!(app.form.commit(Field::Aperture, "-1").is_err());
+    }
+
+    #[test]
     fn a_rolled_back_integrator_takes_the_selection_off_a_hidden_field() {
         let mut app = small_app();
         let first = app.request(true);
@@ -665,6 +772,7 @@ mod tests {
             settings: app.settings(),
             scene_render: SettingsOverrides::default(),
             scene_name: "cornell".into(),
+            scene: std::sync::Arc::new(crate::scene::load("cornell").expect("built-in")),
             notes: BuildNotes::default(),
             threads: 1,
         });

@@ -5,6 +5,7 @@
 //! and shown only while it is `painterly` (they do nothing for the others).
 
 use super::color::{ColorChoice, ColorMode};
+use crate::checked::MAX_MAGNITUDE;
 use crate::sampling::SamplerKind;
 use crate::settings::painterly::{check_range, parse_unit, MAX_STROKE};
 use crate::settings::{
@@ -32,10 +33,12 @@ pub enum Field {
     Threads,
     Color,
     TargetError,
+    Aperture,
+    Focus,
 }
 
 impl Field {
-    pub const ALL: [Field; 18] = [
+    pub const ALL: [Field; 20] = [
         Field::Scene,
         Field::Width,
         Field::Height,
@@ -54,6 +57,8 @@ impl Field {
         Field::Threads,
         Field::Color,
         Field::TargetError,
+        Field::Aperture,
+        Field::Focus,
     ];
 
     pub fn label(self) -> &'static str {
@@ -76,6 +81,8 @@ impl Field {
             Field::Threads => "threads",
             Field::Color => "colour",
             Field::TargetError => "target err",
+            Field::Aperture => "aperture",
+            Field::Focus => "focus",
         }
     }
 
@@ -84,6 +91,7 @@ impl Field {
         match self {
             Field::Correlation => "correlation",
             Field::TargetError => "target error",
+            Field::Focus => "focus distance",
             _ => self.label(),
         }
     }
@@ -145,6 +153,8 @@ pub struct Shown<'a> {
     pub settings: &'a RenderSettings,
     pub color_mode: ColorMode,
     pub threads: usize,
+    /// The scene camera's lens radius and focus distance (the form's lens fields replace them).
+    pub lens: (f64, f64),
 }
 
 impl Form {
@@ -217,6 +227,11 @@ impl Form {
             }
             Field::Color => self.color.name().into(),
             Field::TargetError => s.target_error.map_or("off".into(), |e| e.to_string()),
+            Field::Aperture => match s.aperture.unwrap_or(now.lens.0) {
+                a if a > 0.0 => a.to_string(),
+                _ => "0 (pinhole)".into(),
+            },
+            Field::Focus => short_number(s.focus_distance.unwrap_or(now.lens.1)),
         }
     }
 
@@ -224,6 +239,7 @@ impl Form {
     pub fn edit_text(&self, field: Field, now: &Shown) -> String {
         match field {
             Field::Threads if now.settings.threads == 0 => "auto".into(),
+            Field::Aperture => now.settings.aperture.unwrap_or(now.lens.0).to_string(),
             _ => self.value(field, now),
         }
     }
@@ -338,6 +354,30 @@ impl Form {
                         .ok_or_else(|| err("a relative error > 0 (e.g. 0.01) or `off`"))?,
                 )
             }
+            // "scene" (or empty) goes back to the scene camera's lens.
+            Field::Aperture | Field::Focus if t.is_empty() || t.eq_ignore_ascii_case("scene") => {
+                if field == Field::Aperture {
+                    o.aperture = None
+                } else {
+                    o.focus_distance = None
+                }
+            }
+            Field::Aperture => {
+                o.aperture = Some(
+                    t.parse::<f64>()
+                        .ok()
+                        .filter(|v| v.is_finite() && (0.0..=MAX_MAGNITUDE).contains(v))
+                        .ok_or_else(|| err("a lens radius >= 0 in scene units (0: pinhole)"))?,
+                )
+            }
+            Field::Focus => {
+                o.focus_distance = Some(
+                    t.parse::<f64>()
+                        .ok()
+                        .filter(|v| v.is_finite() && *v > 0.0 && *v <= MAX_MAGNITUDE)
+                        .ok_or_else(|| err("a distance > 0 in scene units"))?,
+                )
+            }
             Field::Integrator
             | Field::Hemisphere
             | Field::Sampler
@@ -349,6 +389,15 @@ impl Form {
     }
 }
 
+/// A distance with four significant digits ("295.9", "0.01234"), as the form has little room.
+fn short_number(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return v.to_string();
+    }
+    let digits = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.digits$}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -358,6 +407,7 @@ mod tests {
             settings: s,
             color_mode: ColorMode::Ansi256,
             threads: 2,
+            lens: (0.0, 295.6),
         }
     }
 
@@ -477,6 +527,6 @@ mod tests {
         // Wrapping skips hidden fields too.
         f.selected = Field::Scene;
         f.select_next(false, IntegratorKind::Path);
-        assert_eq!(f.field(), Field::TargetError);
+        assert_eq!(f.field(), Field::Focus);
     }
 }

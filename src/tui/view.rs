@@ -170,6 +170,7 @@ fn draw_form(frame: &mut Frame, app: &App, area: Rect) {
         settings: &s,
         color_mode: app.color_mode,
         threads: app.threads,
+        lens: app.lens(),
     };
     // The painterly knobs only while that integrator is in effect.
     let fields: Vec<Field> = Field::visible(s.integrator).collect();
@@ -496,6 +497,7 @@ const HELP: &[(&str, &str)] = &[
     ("s / e", "save the full-resolution PNG / linear EXR"),
     ("+ / -  0", "zoom in (down to 1:1) / out, fit"),
     ("arrows / hjkl", "pan the zoomed preview"),
+    ("F", "focus the lens on what the preview's centre shows"),
     ("c", "toggle truecolor / 256 colours"),
     ("f", "toggle half-blocks / spaces only"),
     ("g", "toggle the error-vs-time chart"),
@@ -596,6 +598,13 @@ fn draw_details(frame: &mut Frame, app: &App, area: Rect) {
         "scene build",
         format!("{:.1} ms", app.notes.build_time.as_secs_f64() * 1e3),
     ));
+    if let Some(scene) = &app.scene {
+        let s = app.settings();
+        let camera = scene
+            .camera
+            .with_lens_settings(s.aperture, s.focus_distance);
+        rows.push(("camera", camera.lens_text()));
+    }
     rows.push(("accel", app.notes.accel.clone()));
     rows.push(("lights", app.notes.light_sampling.clone()));
     rows.push(("caustics", app.notes.caustics.clone()));
@@ -696,6 +705,7 @@ mod tests {
             settings: app.settings(),
             scene_render: SettingsOverrides::default(),
             scene_name: "cornell".into(),
+            scene: std::sync::Arc::new(crate::scene::load("cornell").expect("built-in")),
             notes: cornell_notes(),
             threads: 2,
         });
