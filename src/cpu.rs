@@ -1,8 +1,11 @@
-//! Which of the hot loops' compiled copies the CPU can run. The row tracer
-//! (`render::sample_row`) and the light tracer's chunks (`CausticTracer::trace_pass`) each have a
-//! copy compiled for x86-64-v3, with the shading `#[inline(always)]` into it, chosen at run time
-//! so the default build still runs on any x86-64. Rust never contracts a multiply and an add into
-//! an FMA, so every copy gives the same bits.
+//! The one place that knows which compiled copies of the hot loops the CPU can run. The row
+//! tracer (`render::sample_row`), the light tracer's chunks (`CausticTracer::trace_pass`) and the
+//! sphere lanes (`accel::lanes`) each have a copy compiled for x86-64-v3 ([`v3_copy!`]), chosen
+//! at run time by [`ShadingCode::detect`] so the default build still runs on any x86-64; the
+//! sphere lanes have an AVX-512F copy too ([`avx512_copy!`], [`has_avx512f`]), whose 8-wide f64
+//! vectors fit their eight lanes. Rust never contracts a multiply and an add into an FMA, so every
+//! copy gives the same bits. (`multiversion` was considered: its 0.7 and later releases do not
+//! take methods with `self`, which every copy here is.)
 
 /// Defines a function compiled for x86-64-v3 (only on x86-64): the features named here are the
 /// ones [`ShadingCode::detect`] checks, so the two lists live side by side. Call it only when
@@ -16,6 +19,33 @@ macro_rules! v3_copy {
     };
 }
 pub(crate) use v3_copy;
+
+/// Defines a function compiled for AVX-512F (only on x86-64). Call it only when [`has_avx512f`]
+/// returns true.
+macro_rules! avx512_copy {
+    ($(#[$meta:meta])* $vis:vis unsafe fn $($rest:tt)*) => {
+        $(#[$meta])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f")]
+        $vis unsafe fn $($rest)*
+    };
+}
+pub(crate) use avx512_copy;
+
+/// Whether this CPU runs [`avx512_copy!`] functions (detected once).
+pub fn has_avx512f() -> bool {
+    static HAS: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *HAS.get_or_init(|| {
+        #[cfg(target_arch = "x86_64")]
+        {
+            std::arch::is_x86_feature_detected!("avx512f")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    })
+}
 
 /// Which compiled copy of the hot loops (`render::sample_row`, the light tracer's chunks) this
 /// CPU runs.

@@ -1,9 +1,11 @@
 //! Spheres in structure-of-arrays form, tested eight at a time with straight-line code the
-//! compiler vectorises: run-time dispatch to an AVX-512 build (one 8-wide f64 operation per
-//! step) or an AVX2 build (two 4-wide), else the baseline SSE2 code; no `target-cpu` needed.
+//! compiler vectorises: run-time dispatch (`crate::cpu`) to an AVX-512F build (one 8-wide f64
+//! operation per step) or an x86-64-v3 build (AVX2: two 4-wide), else the baseline SSE2 code; no
+//! `target-cpu` needed.
 //! Eight lanes beat four even in AVX2 (benches/HISTORY.md#sphere-lanes). Same arithmetic, in
 //! the same order, as [`Sphere::intersect`], so the roots are bit-identical to the scalar test.
 
+use crate::cpu::{avx512_copy, has_avx512f, v3_copy, ShadingCode};
 use crate::geometry::Primitive;
 use crate::math::{DVec3, Ray};
 
@@ -15,9 +17,8 @@ const SCALAR_TAIL: usize = 2;
 
 #[derive(Clone, Debug, Default)]
 pub struct SphereLanes {
-    /// Whether this CPU has AVX2 / AVX-512F: then the same code is run compiled for 4- or 8-wide
-    /// f64 vectors.
-    /// Rust never contracts a * b + c into an FMA, so both builds give the same bits.
+    /// Whether this CPU runs the x86-64-v3 / AVX-512F copies: then the same code is run compiled
+    /// for 4- or 8-wide f64 vectors, with the same bits (see `crate::cpu`).
     avx2: bool,
     avx512: bool,
     cx: Vec<[f64; LANES]>,
@@ -141,8 +142,8 @@ impl SphereLanes {
     /// ray hits (its discriminant is NaN or negative, never >= 0 with a finite root).
     pub fn new(prims: &[Primitive]) -> Self {
         let mut s = SphereLanes {
-            avx2: has_avx2(),
-            avx512: has_avx512(),
+            avx2: has_v3(),
+            avx512: has_avx512f(),
             ..Default::default()
         };
         let spheres: Vec<(u32, crate::geometry::Sphere)> = prims
@@ -202,22 +203,22 @@ impl SphereLanes {
         }
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
-            // SAFETY: `avx2` is only set when the running CPU reports AVX2.
+            // SAFETY: `avx2` is only set when the running CPU runs x86-64-v3 code.
             return unsafe { self.intersect_avx2(ray, t_max) };
         }
         self.intersect_portable(ray, t_max)
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn intersect_avx512(&self, ray: &Ray, t_max: f64) -> Option<(f64, u32)> {
-        self.intersect_portable(ray, t_max)
+    avx512_copy! {
+        unsafe fn intersect_avx512(&self, ray: &Ray, t_max: f64) -> Option<(f64, u32)> {
+            self.intersect_portable(ray, t_max)
+        }
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn intersect_avx2(&self, ray: &Ray, t_max: f64) -> Option<(f64, u32)> {
-        self.intersect_portable(ray, t_max)
+    v3_copy! {
+        unsafe fn intersect_avx2(&self, ray: &Ray, t_max: f64) -> Option<(f64, u32)> {
+            self.intersect_portable(ray, t_max)
+        }
     }
 
     #[inline(always)]
@@ -284,22 +285,22 @@ impl SphereLanes {
         }
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
-            // SAFETY: `avx2` is only set when the running CPU reports AVX2.
+            // SAFETY: `avx2` is only set when the running CPU runs x86-64-v3 code.
             return unsafe { self.closest_batch_avx2(batch) };
         }
         self.closest_batch_portable(batch)
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn closest_batch_avx512(&self, batch: &mut RayBatch) {
-        self.closest_batch_portable(batch)
+    avx512_copy! {
+        unsafe fn closest_batch_avx512(&self, batch: &mut RayBatch) {
+            self.closest_batch_portable(batch)
+        }
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn closest_batch_avx2(&self, batch: &mut RayBatch) {
-        self.closest_batch_portable(batch)
+    v3_copy! {
+        unsafe fn closest_batch_avx2(&self, batch: &mut RayBatch) {
+            self.closest_batch_portable(batch)
+        }
     }
 
     /// The loop every copy compiles.
@@ -364,26 +365,9 @@ impl SphereLanes {
     }
 }
 
-fn has_avx512() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-fn has_avx2() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+/// Whether the x86-64-v3 copies run here (the row tracer's test, in `crate::cpu`).
+fn has_v3() -> bool {
+    ShadingCode::detect() == ShadingCode::V3
 }
 
 #[cfg(test)]
@@ -457,13 +441,13 @@ mod tests {
             lanes.closest_batch_portable(&mut batch);
             assert_eq!((&t, &prim), (&batch.t, &batch.prim));
             #[cfg(target_arch = "x86_64")]
-            if has_avx2() {
+            if has_v3() {
                 // SAFETY: checked just above.
                 unsafe { lanes.closest_batch_avx2(&mut batch) };
                 assert_eq!((&t, &prim), (&batch.t, &batch.prim));
             }
             #[cfg(target_arch = "x86_64")]
-            if has_avx512() {
+            if has_avx512f() {
                 // SAFETY: checked just above.
                 unsafe { lanes.closest_batch_avx512(&mut batch) };
                 assert_eq!((&t, &prim), (&batch.t, &batch.prim));
@@ -488,7 +472,7 @@ mod tests {
             assert_eq!(nine.intersect(&ray, t_max), scalar9);
             assert_eq!(lanes.intersect_portable(&ray, t_max), scalar);
             #[cfg(target_arch = "x86_64")]
-            if has_avx2() {
+            if has_v3() {
                 // SAFETY: checked just above.
                 assert_eq!(unsafe { lanes.intersect_avx2(&ray, t_max) }, scalar);
             }
