@@ -6,6 +6,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("math", 1),
     ("cpu", 1),
     ("checked", 1),
+    ("progress", 1),
     ("sampling", 2),
     ("settings", 3),
     ("geometry", 4),

@@ -19,6 +19,7 @@ pub mod io;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod progress;
 pub mod render;
 pub mod sampling;
 pub mod scene;

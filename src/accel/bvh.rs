@@ -11,6 +11,8 @@ use crate::geometry::triangle::gamma;
 use crate::geometry::{Aabb, Hit};
 use crate::geometry::{Primitive, Shape};
 use crate::math::{DVec3, Ray};
+use crate::progress::{tick, Progress};
+use rayon::prelude::*;
 use std::ops::Range;
 use std::time::{Duration, Instant};
 
@@ -24,10 +26,17 @@ const TRAVERSAL_COST: f64 = 1.0;
 /// Below this depth splits follow the SAH; deeper, the median split by count guarantees that
 /// the tree (and the traversal stack) stays shallow even for adversarial inputs.
 const SAH_DEPTH: usize = 48;
+/// Subtrees of at least this many primitives, in the top [`PARALLEL_DEPTH`] levels, build their
+/// second child on another thread, into its own node array that is copied in after the first
+/// child's: the same decisions in the same order, so the same tree as one thread builds, bit
+/// for bit. The depth bound keeps the copying to a few passes over the nodes (2^4 tasks are
+/// plenty for rayon to balance).
+const PARALLEL_MIN: usize = 16 * 1024;
+const PARALLEL_DEPTH: usize = 4;
 /// Traversal stack: at most one entry per level, and the depth is below SAH_DEPTH + 32.
 const STACK: usize = 96;
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Node {
     /// The box's corners as arrays: as `DVec3`s (padded to 32 bytes) a node would take 96 bytes,
     /// not 64, which slowed torus-knot (benches/HISTORY.md#bvh-node-size).
@@ -83,9 +92,20 @@ fn padded(b: Aabb) -> Aabb {
 
 impl Bvh {
     pub fn build(prims: &[Primitive]) -> Bvh {
+        Self::build_with(prims, None)
+    }
+
+    /// [`Self::build`], counting the primitives placed in leaves into `progress` (whose stage
+    /// the caller starts with the primitive count as its total).
+    pub fn build_with(prims: &[Primitive], progress: Option<&Progress>) -> Bvh {
+        Self::build_split(prims, progress, PARALLEL_MIN)
+    }
+
+    /// The build, with subtrees of `parallel_min` primitives or more built on two threads.
+    fn build_split(prims: &[Primitive], progress: Option<&Progress>, parallel_min: usize) -> Bvh {
         let started = Instant::now();
         let mut build: Vec<BuildPrim> = prims
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, p)| {
                 let bounds = padded(p.shape.bounds());
@@ -96,12 +116,18 @@ impl Bvh {
                 }
             })
             .collect();
-        let mut nodes = Vec::with_capacity(2 * prims.len() / MAX_LEAF + 1);
+        // At most 2n - 1 nodes (every leaf holds a primitive): reserved, never reallocated;
+        // pages the tree does not reach are never touched.
+        let mut nodes = Vec::with_capacity(2 * prims.len());
         if !build.is_empty() {
-            build_node(&mut build, 0, 0, &mut nodes);
+            let ctx = BuildCtx {
+                progress,
+                parallel_min,
+            };
+            build_node(&mut build, 0, 0, &mut nodes, &ctx);
         }
-        let order: Vec<u32> = build.iter().map(|b| b.index).collect();
-        let shapes = order.iter().map(|&i| prims[i as usize].shape).collect();
+        let order: Vec<u32> = build.par_iter().map(|b| b.index).collect();
+        let shapes = order.par_iter().map(|&i| prims[i as usize].shape).collect();
         Bvh {
             nodes,
             order,
@@ -112,6 +138,13 @@ impl Bvh {
 
     pub fn node_count(&self) -> usize {
         self.nodes.len()
+    }
+
+    /// Bytes the tree holds: nodes, the leaf order and the shapes copied into leaf order.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>()
+            + self.order.len() * std::mem::size_of::<u32>()
+            + self.shapes.len() * std::mem::size_of::<Shape>()
     }
 
     /// Measured cost of closest-hit queries for `rays`, in units of one primitive test: the
@@ -297,8 +330,21 @@ fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
     })
 }
 
+/// What every level of a build shares.
+struct BuildCtx<'a> {
+    progress: Option<&'a Progress>,
+    parallel_min: usize,
+}
+
 /// Build the subtree over `prims` (which sit at `first` in the final order); returns its index.
-fn build_node(prims: &mut [BuildPrim], first: usize, depth: usize, nodes: &mut Vec<Node>) -> usize {
+fn build_node(
+    prims: &mut [BuildPrim],
+    first: usize,
+    depth: usize,
+    nodes: &mut Vec<Node>,
+    ctx: &BuildCtx,
+) -> usize {
+    let progress = ctx.progress;
     let (bounds, centroids) = bounds_of(prims);
     let index = nodes.len();
     nodes.push(Node {
@@ -309,6 +355,7 @@ fn build_node(prims: &mut [BuildPrim], first: usize, depth: usize, nodes: &mut V
     });
     let n = prims.len();
     if n == 1 {
+        tick(progress, 1);
         return index;
     }
     let extent = centroids.max - centroids.min;
@@ -322,13 +369,14 @@ fn build_node(prims: &mut [BuildPrim], first: usize, depth: usize, nodes: &mut V
     if extent[axis].is_nan() || extent[axis] <= 0.0 {
         // All centroids coincide: no split can separate them by position.
         if n <= MAX_LEAF {
+            tick(progress, n as u64);
             return index;
         }
-        return split_at(prims, first, depth, nodes, index, axis, n / 2);
+        return split_at(prims, first, depth, nodes, index, axis, n / 2, ctx);
     }
     if depth >= SAH_DEPTH {
         prims.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-        return split_at(prims, first, depth, nodes, index, axis, n / 2);
+        return split_at(prims, first, depth, nodes, index, axis, n / 2, ctx);
     }
 
     // Bin centroids along the axis and sweep for the cheapest bucket boundary.
@@ -369,6 +417,7 @@ fn build_node(prims: &mut [BuildPrim], first: usize, depth: usize, nodes: &mut V
     let area = bounds.half_area();
     let split_cost = TRAVERSAL_COST + if area > 0.0 { best_cost / area } else { 0.0 };
     if n <= MAX_LEAF && n as f64 <= split_cost {
+        tick(progress, n as u64);
         return index;
     }
     let mid = partition(prims, |p| bucket_of(p) <= best);
@@ -379,9 +428,10 @@ fn build_node(prims: &mut [BuildPrim], first: usize, depth: usize, nodes: &mut V
     } else {
         mid
     };
-    split_at(prims, first, depth, nodes, index, axis, mid)
+    split_at(prims, first, depth, nodes, index, axis, mid, ctx)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn split_at(
     prims: &mut [BuildPrim],
     first: usize,
@@ -390,14 +440,45 @@ fn split_at(
     index: usize,
     axis: usize,
     mid: usize,
+    ctx: &BuildCtx,
 ) -> usize {
+    let parallel = prims.len() >= ctx.parallel_min && depth < PARALLEL_DEPTH;
     let (left, right) = prims.split_at_mut(mid);
-    build_node(left, first, depth + 1, nodes);
-    let second = build_node(right, first + mid, depth + 1, nodes);
+    let second = if parallel {
+        let ((), r) = rayon::join(
+            || {
+                build_node(left, first, depth + 1, nodes, ctx);
+            },
+            || {
+                let mut own = Vec::with_capacity(2 * right.len());
+                build_node(right, first + mid, depth + 1, &mut own, ctx);
+                own
+            },
+        );
+        let second = nodes.len();
+        splice(nodes, r);
+        second
+    } else {
+        build_node(left, first, depth + 1, nodes, ctx);
+        build_node(right, first + mid, depth + 1, nodes, ctx)
+    };
     nodes[index].offset = second as u32;
     nodes[index].count = 0;
     nodes[index].axis = axis as u8;
     index
+}
+
+/// Append a subtree built into its own array: its interior nodes' child indices were relative
+/// to that array's start (leaves index `order`, which does not move).
+fn splice(nodes: &mut Vec<Node>, subtree: Vec<Node>) {
+    let base = nodes.len() as u32;
+    let start = nodes.len();
+    nodes.extend_from_slice(&subtree);
+    for n in &mut nodes[start..] {
+        if n.count == 0 {
+            n.offset += base;
+        }
+    }
 }
 
 /// In-place partition: elements satisfying `pred` first; returns how many.
@@ -410,4 +491,30 @@ fn partition(prims: &mut [BuildPrim], pred: impl Fn(&BuildPrim) -> bool) -> usiz
         }
     }
     mid
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::bench::random_prims;
+
+    #[test]
+    fn the_parallel_build_is_the_one_thread_build_node_for_node() {
+        let prims = random_prims(5000, 7);
+        let one = Bvh::build_split(&prims, None, usize::MAX);
+        let split = Bvh::build_split(&prims, None, 64);
+        assert!(one.nodes.len() > 1000);
+        assert_eq!(one.nodes, split.nodes);
+        assert_eq!(one.order, split.order);
+        split.check(&prims).unwrap();
+    }
+
+    #[test]
+    fn the_build_counts_every_primitive_into_its_progress() {
+        let prims = random_prims(3000, 8);
+        let progress = Progress::default();
+        progress.start("BVH", prims.len() as u64);
+        Bvh::build_split(&prims, Some(&progress), 64);
+        assert_eq!(progress.snapshot().2, prims.len() as u64);
+    }
 }

@@ -21,6 +21,7 @@ use crate::camera::Camera;
 use crate::geometry::Hit;
 use crate::geometry::Primitive;
 use crate::math::Ray;
+use crate::progress::Progress;
 use serde::Deserialize;
 
 pub use bvh::Bvh;
@@ -63,17 +64,29 @@ impl Accel {
     /// Build the accelerator `choice` asks for over `prims`, with the reason for the choice.
     /// `probe` holds rays typical of the scene (the camera's): with `auto`, a BVH that would
     /// not test fewer primitives than the flat scan for them is dropped.
-    pub fn build(choice: AccelChoice, prims: &[Primitive], probe: &[Ray]) -> (Accel, String) {
+    /// A BVH build counts into `progress` (a stage it starts).
+    pub fn build(
+        choice: AccelChoice,
+        prims: &[Primitive],
+        probe: &[Ray],
+        progress: Option<&Progress>,
+    ) -> (Accel, String) {
         let n = prims.len();
+        let bvh = || {
+            if let Some(p) = progress {
+                p.start("building the BVH", n as u64);
+            }
+            Bvh::build_with(prims, progress)
+        };
         match choice {
             AccelChoice::Flat => (Accel::Flat(flat::FlatScan::new(prims)), "forced".into()),
-            AccelChoice::Bvh => (Accel::Bvh(Bvh::build(prims)), "forced".into()),
+            AccelChoice::Bvh => (Accel::Bvh(bvh()), "forced".into()),
             AccelChoice::Auto if n < BVH_CROSSOVER => (
                 Accel::Flat(flat::FlatScan::new(prims)),
                 format!("auto: below the measured crossover of {BVH_CROSSOVER}"),
             ),
             AccelChoice::Auto => {
-                let bvh = Bvh::build(prims);
+                let bvh = bvh();
                 let cost = bvh.probe_cost(probe);
                 if probe.is_empty() || cost < n as f64 {
                     let why = format!(

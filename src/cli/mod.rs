@@ -5,6 +5,7 @@ pub mod check;
 pub mod converge;
 pub mod merge;
 pub mod render;
+pub mod scene_progress;
 pub mod tui;
 
 use crate::sampling::SamplerKind;

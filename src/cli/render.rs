@@ -39,7 +39,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         accel: args.accel,
         ..Default::default()
     };
-    let scene = Arc::new(scene::load_with(&spec, &options)?);
+    let scene = Arc::new(super::scene_progress::load(&spec, &options, args.quiet)?);
     let hash = film_file::scene_hash(&spec).map_err(|e| anyhow::anyhow!("scene hash: {e}"))?;
     let overrides = args.settings.overrides();
     let mut settings = RenderSettings::resolve(&scene.render, &overrides, None);

@@ -13,6 +13,7 @@
 
 use super::Triangle;
 use crate::math::DVec3;
+use rayon::prelude::*;
 use std::f64::consts::TAU;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,22 +66,24 @@ impl TorusKnot {
                 })
                 .collect()
         };
-        let rings: Vec<Vec<(DVec3, DVec3)>> = (0..n).map(ring).collect();
-        let mut tris = Vec::with_capacity(2 * n * m);
-        let mut normals = Vec::with_capacity(2 * n * m);
+        // Rings and their quads in parallel: a 10M-triangle knot is seconds of work on one
+        // thread. Collected in order, so the mesh is the same whatever the threads.
+        let rings: Vec<Vec<(DVec3, DVec3)>> = (0..n).into_par_iter().map(ring).collect();
         let f32s = |v: DVec3| v.as_vec3().to_array();
-        for i in 0..n {
-            let (a, b) = (&rings[i], &rings[(i + 1) % n]);
-            for j in 0..m {
-                let k = (j + 1) % m;
-                // Counter-clockwise seen from outside: with T along the tube and B around it,
-                // (T + B) x T and B x (T + B) both point away from the centre line.
-                for [(p0, n0), (p1, n1), (p2, n2)] in [[a[j], b[k], b[j]], [a[j], a[k], b[k]]] {
-                    tris.push(Triangle::new(p0, p1, p2));
-                    normals.push([f32s(n0), f32s(n1), f32s(n2)]);
-                }
-            }
-        }
+        let (tris, normals): (Vec<Triangle>, Vec<[[f32; 3]; 3]>) = (0..n)
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let (a, b) = (&rings[i], &rings[(i + 1) % n]);
+                (0..m).flat_map(move |j| {
+                    let k = (j + 1) % m;
+                    // Counter-clockwise seen from outside: with T along the tube and B around
+                    // it, (T + B) x T and B x (T + B) both point away from the centre line.
+                    [[a[j], b[k], b[j]], [a[j], a[k], b[k]]].map(|[(p0, n0), (p1, n1), (p2, n2)]| {
+                        (Triangle::new(p0, p1, p2), [f32s(n0), f32s(n1), f32s(n2)])
+                    })
+                })
+            })
+            .unzip();
         (tris, normals)
     }
 }

@@ -3,7 +3,7 @@
 
 use super::description::{MaterialDesc, MaterialName, MeshDesc, SceneDesc};
 use super::mesh::{self, Transform};
-use super::MAX_MESH_TRIANGLES;
+use super::mesh_triangle_room;
 use super::{builtin, BuildReport, Scene, SceneError};
 use crate::accel::{camera_probe, Accel, AccelChoice};
 use crate::camera::Camera;
@@ -13,10 +13,12 @@ use crate::geometry::{Sphere, Triangle};
 use crate::light::{sphere::SphereLight, triangle::TriangleLight, Light, Lights};
 use crate::material::{Material, MaterialKind};
 use crate::math::{DVec3, Ray};
+use crate::progress::Progress;
 use crate::settings::RenderSettings;
 use std::collections::HashSet;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 use toml::Spanned;
 
@@ -35,6 +37,8 @@ pub struct BuildOptions {
     /// Where relative mesh paths start: the scene file's folder (`load` sets it); `None` means
     /// the current directory.
     pub base_dir: Option<PathBuf>,
+    /// Where a long build (a large OBJ, a large mesh's BVH) reports how far it has got.
+    pub progress: Option<Arc<Progress>>,
 }
 
 /// Load a scene from a file path or a built-in name (a file of that name wins).
@@ -269,7 +273,7 @@ fn build(
     let size = RenderSettings::merged(&[&desc.render]);
     let nx = ((32 * size.width) / size.height.max(1)).clamp(1, 128);
     let probe = camera_probe(&camera, nx, 32);
-    let (accel, why) = Accel::build(choice, &prims, &probe);
+    let (accel, why) = Accel::build(choice, &prims, &probe, options.progress.as_deref());
     let camera = focus_camera(camera, desc, &accel, &prims, src, file)?;
     let lights = Lights::new(clip_sphere_lights(lights, &prims));
     let mut light_sampling = match lights.len() {
@@ -330,7 +334,8 @@ fn build_mesh(
     object: &str,
     options: &BuildOptions,
 ) -> Result<mesh::Mesh, SceneError> {
-    let room = MAX_MESH_TRIANGLES.saturating_sub(b.mesh_triangles);
+    let (room, why) = mesh_triangle_room(b.mesh_triangles);
+    let progress = options.progress.as_deref();
     let built = match (&m.path, &m.torus_knot) {
         (Some(path), None) => {
             let full = match &options.base_dir {
@@ -338,8 +343,14 @@ fn build_mesh(
                 None => PathBuf::from(path.get_ref()),
             };
             // The reader's messages start with the file (and line).
-            mesh::load_obj(&full, room, m.smooth)
-                .map_err(|msg| b.err(Some(path.span()), format!("{object}.path"), msg))?
+            mesh::load_obj_with(&full, room, m.smooth, progress).map_err(|msg| {
+                let msg = if msg.ends_with(super::obj::NO_ROOM) {
+                    format!("{msg} ({why})")
+                } else {
+                    msg
+                };
+                b.err(Some(path.span()), format!("{object}.path"), msg)
+            })?
         }
         (None, Some(knot)) => {
             let k = knot.get_ref();
@@ -363,11 +374,13 @@ fn build_mesh(
                     Some(knot.span()),
                     field,
                     format!(
-                        "{} triangles: more than the {room} this scene has room for \
-                         (at most {MAX_MESH_TRIANGLES} mesh triangles per scene)",
+                        "{} triangles: more than the {room} this scene has room for ({why})",
                         knot_gen.triangle_count()
                     ),
                 ));
+            }
+            if let Some(p) = progress {
+                p.start(format!("{object}: generating the torus knot"), 0);
             }
             let (triangles, normals) = knot_gen.triangles_and_normals();
             let smooth = m.smooth != Some(false);
@@ -401,6 +414,12 @@ fn build_mesh(
         rotate_degrees: m.rotate.map_or(DVec3::ZERO, |r| DVec3::from_array(r.0)),
         translate: m.translate.map_or(DVec3::ZERO, |t| DVec3::from_array(t.0)),
     };
+    if let Some(p) = progress {
+        p.start(
+            format!("{object}: placing {} triangles", built.triangles.len()),
+            0,
+        );
+    }
     let built = transform
         .apply_mesh(built)
         .map_err(|msg| b.err(None, object.to_string(), msg))?;

@@ -20,7 +20,9 @@
 use super::obj;
 use crate::geometry::Triangle;
 use crate::math::DVec3;
+use crate::progress::Progress;
 use glam::DMat3;
+use rayon::prelude::*;
 use std::path::Path;
 
 /// Scale, then rotate (degrees about x, then y, then z), then translate.
@@ -64,33 +66,44 @@ impl Transform {
     pub fn apply_mesh(&self, mesh: Mesh) -> Result<Mesh, String> {
         let m = self.matrix();
         let rot = self.matrix() * (1.0 / self.scale);
-        let has_normals = !mesh.normals.is_empty();
-        let mut out = Mesh {
-            triangles: Vec::with_capacity(mesh.triangles.len()),
-            normals: Vec::with_capacity(mesh.normals.len()),
-            warnings: mesh.warnings,
-        };
-        for (i, t) in mesh.triangles.iter().enumerate() {
-            let p = t.p().map(|v| DVec3::from(m * v.to_glam()) + self.translate);
-            if !p.iter().all(|v| v.is_finite()) {
-                return Err("a vertex is not a finite number".into());
-            }
-            let t = Triangle::new(p[0], p[1], p[2]);
-            if t.normal().is_none() {
-                continue;
-            }
-            out.triangles.push(t);
-            if has_normals {
-                let ns = mesh.normals.get(i).copied().flatten().map(|ns| {
-                    ns.map(|n| {
-                        let n = rot * glam::DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
-                        n.normalize_or_zero().as_vec3().to_array()
-                    })
-                });
-                out.normals.push(ns);
-            }
+        let place = |t: &Triangle| t.p().map(|v| DVec3::from(m * v.to_glam()) + self.translate);
+        // In parallel (a large mesh is seconds of work on one thread), collected in order.
+        if mesh
+            .triangles
+            .par_iter()
+            .any(|t| !place(t).iter().all(|v| v.is_finite()))
+        {
+            return Err("a vertex is not a finite number".into());
         }
-        Ok(out)
+        let placed = |t: &Triangle| {
+            let p = place(t);
+            let t = Triangle::new(p[0], p[1], p[2]);
+            t.normal().is_some().then_some(t)
+        };
+        let rotate = |ns: [[f32; 3]; 3]| {
+            ns.map(|n| {
+                let n = rot * glam::DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+                n.normalize_or_zero().as_vec3().to_array()
+            })
+        };
+        let (triangles, normals) = if mesh.normals.is_empty() {
+            let triangles = mesh.triangles.par_iter().filter_map(placed).collect();
+            (triangles, Vec::new())
+        } else {
+            mesh.triangles
+                .par_iter()
+                .enumerate()
+                .filter_map(|(i, t)| {
+                    let ns = mesh.normals.get(i).copied().flatten().map(rotate);
+                    placed(t).map(|t| (t, ns))
+                })
+                .unzip()
+        };
+        Ok(Mesh {
+            triangles,
+            normals,
+            warnings: mesh.warnings,
+        })
     }
 }
 
@@ -115,7 +128,17 @@ impl Mesh {
 /// `smooth`: the `[[mesh]]` key (None: smooth where the file gives normals). Errors read
 /// `path:line: reason`.
 pub fn load_obj(path: &Path, limit: u64, smooth: Option<bool>) -> Result<Mesh, String> {
-    let data = obj::read(path, limit)?;
+    load_obj_with(path, limit, smooth, None)
+}
+
+/// [`load_obj`], reporting the bytes read into `progress`.
+pub fn load_obj_with(
+    path: &Path,
+    limit: u64,
+    smooth: Option<bool>,
+    progress: Option<&Progress>,
+) -> Result<Mesh, String> {
+    let data = obj::read(path, limit, progress)?;
     let pos = |c: obj::Corner| DVec3::from_array(data.positions[c.v as usize]);
     let unit = |n: [f64; 3]| {
         let n = DVec3::from_array(n);

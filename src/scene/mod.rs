@@ -21,9 +21,36 @@ use std::time::Duration;
 pub use error::SceneError;
 pub use load::{load, load_str, load_str_with, load_with, BuildOptions};
 
-/// Most triangles all meshes of one scene may hold together. A triangle primitive takes about
-/// 100 bytes (plus the BVH's share), so this bounds a scene's geometry at roughly 0.5 GB.
-pub const MAX_MESH_TRIANGLES: u64 = 4_000_000;
+/// Most triangles all meshes of one scene may hold together, whatever the memory: the BVH
+/// indexes nodes and primitives with u32, and a tree has fewer than two nodes per primitive.
+pub const MAX_MESH_TRIANGLES: u64 = (u32::MAX / 2) as u64;
+
+/// Peak memory of a scene build per mesh triangle: the triangle primitive, its shading normals,
+/// the mesh it was read into, the BVH (~180-220 bytes a triangle) and the build's own working
+/// copy. Measured peak RSS over triangles was ~440 bytes (benches/HISTORY.md, "Meshes at
+/// scale"); this leaves a margin.
+pub const BUILD_BYTES_PER_TRIANGLE: u64 = 512;
+
+/// How many more mesh triangles a scene that holds `so_far` may take: the index bound, and
+/// what the available memory holds at [`BUILD_BYTES_PER_TRIANGLE`] (where the system says).
+/// The text says which bound it is, with the numbers, for the error.
+pub fn mesh_triangle_room(so_far: u64) -> (u64, String) {
+    let by_index = MAX_MESH_TRIANGLES.saturating_sub(so_far);
+    match crate::settings::available_memory() {
+        Some(avail) if avail / BUILD_BYTES_PER_TRIANGLE < MAX_MESH_TRIANGLES => (
+            (avail / BUILD_BYTES_PER_TRIANGLE).saturating_sub(so_far),
+            format!(
+                "at about {BUILD_BYTES_PER_TRIANGLE} bytes a triangle for the triangles and their                  BVH, the {} of memory available hold {} mesh triangles per scene",
+                crate::settings::human_bytes(avail),
+                avail / BUILD_BYTES_PER_TRIANGLE
+            ),
+        ),
+        _ => (
+            by_index,
+            format!("at most {MAX_MESH_TRIANGLES} mesh triangles per scene (the BVH's indices)"),
+        ),
+    }
+}
 
 /// What the scene build chose, reported to the user.
 #[derive(Clone, Debug)]

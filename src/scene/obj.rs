@@ -10,6 +10,7 @@
 //! number is an error `file:line: reason`. Nothing here panics on any input.
 
 use crate::checked::MAX_MAGNITUDE;
+use crate::progress::{tick, Progress};
 use std::path::Path;
 
 /// No normal: the corner or face is flat-shaded.
@@ -42,18 +43,35 @@ struct Face {
 
 /// Parse the OBJ file at `path`; `limit` is how many triangles the caller accepts. Errors read
 /// `path:line: reason` (or `path: reason` for the file as a whole).
-pub fn read(path: &Path, limit: u64) -> Result<ObjData, String> {
+pub fn read(path: &Path, limit: u64, progress: Option<&Progress>) -> Result<ObjData, String> {
     let shown = path.display();
     // Read it ourselves: io errors (missing, a directory, no permission) say what went wrong.
     let bytes = std::fs::read(path).map_err(|e| match e.kind() {
         std::io::ErrorKind::IsADirectory => format!("{shown}: is a directory, not an OBJ file"),
         _ => format!("{shown}: cannot read OBJ file: {e}"),
     })?;
-    parse(&bytes, &shown.to_string(), limit)
+    if let Some(p) = progress {
+        p.start(format!("reading {shown}"), bytes.len() as u64);
+    }
+    parse_with(&bytes, &shown.to_string(), limit, progress)
 }
+
+/// The end of the message for a file with more triangles than the scene has room for (the
+/// scene build adds why).
+pub const NO_ROOM: &str = "the most this scene has room for";
 
 /// [`read`] on bytes already in memory; `name` stands for the file in messages.
 pub fn parse(bytes: &[u8], name: &str, limit: u64) -> Result<ObjData, String> {
+    parse_with(bytes, name, limit, None)
+}
+
+/// [`parse`], counting the bytes read into `progress` as it goes.
+pub fn parse_with(
+    bytes: &[u8],
+    name: &str,
+    limit: u64,
+    progress: Option<&Progress>,
+) -> Result<ObjData, String> {
     let mut data = ObjData::default();
     let mut corners: Vec<(i64, i64, usize)> = Vec::new();
     let mut faces: Vec<Face> = Vec::new();
@@ -66,7 +84,13 @@ pub fn parse(bytes: &[u8], name: &str, limit: u64) -> Result<ObjData, String> {
     // A line ending in a backslash continues on the next one; `line` is where a statement starts.
     let mut pending = String::new();
     let mut pending_line = 0usize;
+    let mut unticked = 0u64;
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        unticked += raw.len() as u64 + 1;
+        if unticked >= 1 << 20 {
+            tick(progress, unticked);
+            unticked = 0;
+        }
         let text = String::from_utf8_lossy(raw);
         let text = text.trim_end_matches('\r');
         if pending.is_empty() {
@@ -132,9 +156,7 @@ pub fn parse(bytes: &[u8], name: &str, limit: u64) -> Result<ObjData, String> {
                 triangle_count += len as u64 - 2;
                 if triangle_count > limit {
                     return Err(format!(
-                        "{name}: has more than {limit} triangles, the most this scene has room \
-                         for (at most {} mesh triangles per scene)",
-                        super::MAX_MESH_TRIANGLES
+                        "{name}: has more than {limit} triangles, {NO_ROOM}"
                     ));
                 }
                 faces.push(Face { start, len });

@@ -105,11 +105,15 @@ fn obj_errors_name_the_file_and_the_problem() {
 #[test]
 fn too_many_triangles_is_an_error_before_generating_them() {
     let src =
-        "[[mesh]]\ntorus_knot = { p = 2, q = 3, segments = 100000, sides = 100, tube = 0.3 }\n";
+        "[[mesh]]\ntorus_knot = { p = 2, q = 3, segments = 100000, sides = 100000, tube = 0.3 }\n";
     let err = scene::load_str(src, "big.toml").expect_err("too big");
     let text = err.to_string();
+    // Refused up front, with the count and the bound (the memory's or the BVH indices').
     assert!(
-        text.contains("20000000 triangles") && text.contains("big.toml:2"),
+        text.contains("20000000000 triangles")
+            && text.contains("big.toml:2")
+            && text.contains("room for")
+            && text.contains("mesh triangles per scene"),
         "{text}"
     );
 }
