@@ -6,6 +6,7 @@
 mod ansi_to_png;
 mod bench_error;
 mod caustic_memory;
+mod embree_workloads;
 mod error_breakdown;
 mod gen_extreme;
 mod gen_spheres_field;
@@ -48,6 +49,14 @@ enum Task {
         #[arg(default_value = "cornell")]
         scene: String,
     },
+    /// Write the Embree side-by-side's workloads (triangle soups, the torus knot's camera and
+    /// diffuse rays) to DIR and print ptui's BVH figures on them (harness/embree_bench.sh).
+    EmbreeWorkloads {
+        dir: PathBuf,
+        /// Leave out the 1M-triangle soup (a quick run).
+        #[arg(long)]
+        skip_1m: bool,
+    },
     /// Where an image's error against a reference sits; optionally a heat map PNG.
     /// REGION=x0,y0,x1,y1 also prints that rectangle's share.
     ErrorBreakdown {
@@ -81,6 +90,7 @@ fn main() -> anyhow::Result<()> {
         )?),
         Task::ProbeLimits { scenes } => probe_limits::run(&scenes),
         Task::CausticMemory { scene } => caustic_memory::run(&scene),
+        Task::EmbreeWorkloads { dir, skip_1m } => embree_workloads::run(&dir, skip_1m),
         Task::ErrorBreakdown {
             image,
             reference,
