@@ -646,7 +646,11 @@ pub(crate) fn light_shadow(
             if e.f_cos.max_element() <= 0.0 {
                 return None;
             }
-            let w = if mis { power_heuristic(pdf, e.pdf) } else { 1.0 };
+            let w = if mis {
+                power_heuristic(pdf, e.pdf)
+            } else {
+                1.0
+            };
             // Nothing may be in the way, however far.
             return Some(Shadow {
                 ray: Ray::new(spawn_origin(hit.p, hit.n, hit.err, s.wi), s.wi),
@@ -658,7 +662,9 @@ pub(crate) fn light_shadow(
         Some(_) => {
             // The rest of the number chooses among the emitters.
             let u_emitter = (u_light - scene.env_select) / (1.0 - scene.env_select);
-            let mut ls = scene.lights.sample(hit.p, side, u_emitter.min(ONE_MINUS_EPS), u)?;
+            let mut ls = scene
+                .lights
+                .sample(hit.p, side, u_emitter.min(ONE_MINUS_EPS), u)?;
             ls.pdf *= 1.0 - scene.env_select;
             ls
         }

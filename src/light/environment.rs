@@ -262,7 +262,9 @@ mod tests {
     use crate::sampling::{warp, Rng};
 
     fn map(width: usize, height: usize, f: impl Fn(usize, usize) -> [f32; 3]) -> EnvMap {
-        let texels = (0..width * height).map(|i| f(i % width, i / width)).collect();
+        let texels = (0..width * height)
+            .map(|i| f(i % width, i / width))
+            .collect();
         EnvMap {
             width,
             height,
@@ -297,8 +299,11 @@ mod tests {
         let turned = Environment::new(&m, 1.0, DVec3::new(0.0, 90.0, 0.0)).expect("lit");
         let minus_z = DVec3::new(0.0, 0.0, -1.0) + DVec3::new(1e-9, 0.0, 0.0);
         // Rotation about y by +90 degrees takes -z to -x.
-        let minus_x = DVec3::new(-1.0, 0.0, 1e-9);
-        assert_eq!(plain.le(minus_z.normalize()), turned.le(minus_x.normalize()));
+        let minus_x = DVec3::new(-1.0, 0.0, -1e-9);
+        assert_eq!(
+            plain.le(minus_z.normalize()),
+            turned.le(minus_x.normalize())
+        );
     }
 
     #[test]
@@ -309,7 +314,13 @@ mod tests {
 
     #[test]
     fn bad_maps_are_refused() {
-        let nan = map(4, 2, |x, _| if x == 3 { [0.0, f32::NAN, 0.0] } else { [1.0; 3] });
+        let nan = map(4, 2, |x, _| {
+            if x == 3 {
+                [0.0, f32::NAN, 0.0]
+            } else {
+                [1.0; 3]
+            }
+        });
         assert!(nan.check().unwrap_err().contains("column 3, row 0"));
         assert!(map(4, 2, |_, _| [-1.0, 0.0, 0.0]).check().is_err());
         assert!(map(4, 2, |_, _| [f32::INFINITY; 3]).check().is_err());
@@ -319,7 +330,9 @@ mod tests {
             texels: Vec::new(),
         };
         assert!(empty.check().unwrap_err().contains("no texels"));
-        assert!(check_size(65536, 32768).unwrap_err().contains("65536x32768"));
+        assert!(check_size(65536, 32768)
+            .unwrap_err()
+            .contains("65536x32768"));
     }
 
     /// Each sample's pdf is what `pdf` says for its direction, and the radiance over the pdf
@@ -332,7 +345,9 @@ mod tests {
         let n = 200_000;
         let mut sum = 0.0;
         for _ in 0..n {
-            let s = env.sample((rng.next_f64(), rng.next_f64())).expect("sample");
+            let s = env
+                .sample((rng.next_f64(), rng.next_f64()))
+                .expect("sample");
             let p = env.pdf(s.wi);
             assert!((p / s.pdf - 1.0).abs() < 1e-6, "{p} vs {}", s.pdf);
             assert_eq!(env.le(s.wi), s.le);

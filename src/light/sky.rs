@@ -48,7 +48,11 @@ pub fn texels(width: usize, height: usize) -> Vec<[f32; 3]> {
         let theta = PI * (y as f64 + 0.5) / height as f64;
         for x in 0..width {
             let phi = 2.0 * PI * (x as f64 + 0.5) / width as f64;
-            let d = DVec3::new(phi.sin() * theta.sin(), theta.cos(), -phi.cos() * theta.sin());
+            let d = DVec3::new(
+                phi.sin() * theta.sin(),
+                theta.cos(),
+                -phi.cos() * theta.sin(),
+            );
             let l = radiance(d);
             out.push([l.x as f32, l.y as f32, l.z as f32]);
         }
@@ -67,6 +71,8 @@ mod tests {
         // The disc's solid angle, 2 pi (1 - cos 2 deg), over a texel's at 35 degrees'
         // elevation: about 40 texels.
         assert!((25..60).contains(&suns), "{suns} sun texels");
-        assert!(t.iter().all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
+        assert!(t
+            .iter()
+            .all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
     }
 }

@@ -274,6 +274,7 @@ fn build(
     let camera = focus_camera(camera, desc, &accel, &prims, src, file)?;
     let lights = Lights::new(clip_sphere_lights(lights, &prims));
     let mut light_sampling = match lights.len() {
+        0 if desc.environment.is_some() => "no emitters".to_string(),
         0 => "off (no emitters)".to_string(),
         1 => format!("1 emitter ({})", sidedness(&lights)),
         n => format!("{n} emitters ({}), chosen by power", sidedness(&lights)),
@@ -289,7 +290,8 @@ fn build(
              point's side is sampled"
         );
     }
-    let sky = build_sky(desc, src, file, options, !lights.is_empty())?;
+    let no_emitters = lights.is_empty();
+    let sky = build_sky(desc, src, file, options, !no_emitters)?;
     let report = BuildReport {
         accel: format!("{} ({why})", accel.describe(prims.len())),
         light_sampling,
@@ -306,7 +308,7 @@ fn build(
         accel,
         shading,
         background: sky.background,
-        env_select: match (&sky.environment, lights.is_empty()) {
+        env_select: match (&sky.environment, no_emitters) {
             (None, _) => 0.0,
             (Some(_), true) => 1.0,
             // Half of the light samples each: neither the sky's power nor the emitters' says
@@ -337,7 +339,8 @@ fn build_sky(
     options: &BuildOptions,
     emitters: bool,
 ) -> Result<Sky, SceneError> {
-    let err = |span, field: &str, msg: String| SceneError::at(file, src, span, Some(field.into()), msg);
+    let err =
+        |span, field: &str, msg: String| SceneError::at(file, src, span, Some(field.into()), msg);
     let constant = |c: DVec3| Sky {
         background: c,
         environment: None,

@@ -87,7 +87,10 @@ fn assert_sky_furnace(film: &Film, cover: &[Option<bool>], albedo: f64, l: [f64;
             );
         }
     }
-    assert!(on >= 50 && off >= 50, "{what}: {on} sphere and {off} sky pixels");
+    assert!(
+        on >= 50 && off >= 50,
+        "{what}: {on} sphere and {off} sky pixels"
+    );
 }
 
 #[test]
@@ -106,7 +109,13 @@ fn furnace_under_a_constant_color() {
             },
         );
         assert_eq!(r.stats().invalid, 0);
-        assert_sky_furnace(r.film(), &cover, 0.6, [1.0, 2.0, 4.0], &format!("{integrator:?}"));
+        assert_sky_furnace(
+            r.film(),
+            &cover,
+            0.6,
+            [1.0, 2.0, 4.0],
+            &format!("{integrator:?}"),
+        );
     }
 }
 
@@ -119,7 +128,10 @@ fn furnace_under_a_constant_map() {
     for (w, h) in [(8, 4), (1, 1), (6, 5)] {
         let path = dir.path().join(format!("sky{w}x{h}.exr"));
         write_exr(&path, w, h, |_, _| [0.5, 1.0, 2.0]);
-        let sky = format!("[environment]\nmap = {:?}\nrotate = [10, 20, 30]", path.to_str().expect("utf-8"));
+        let sky = format!(
+            "[environment]\nmap = {:?}\nrotate = [10, 20, 30]",
+            path.to_str().expect("utf-8")
+        );
         for integrator in [IntegratorKind::Path, IntegratorKind::Naive] {
             let scene = load_str(&furnace_scene(&sky, 0.6));
             assert!(scene.environment.is_some());
@@ -216,7 +228,9 @@ fn render_with(src: &str, integrator: IntegratorKind) -> ptui::render::Renderer 
 /// With a small bright sun, sampling the map by importance (`path`: light samples of the map
 /// and BSDF samples, MIS) has far less variance per sample than BSDF sampling alone (`naive`)
 /// at the same spp. Measured at 128 spp (seed 1): per-sample variance summed over the image,
-/// naive / path = 67.0 (the sun, 0.4% of the sky's solid angle, carries most of the light).
+/// naive / path = 1141 (the sun, 0.1% of the sky's solid angle, carries about half the light,
+/// and BSDF sampling finds it about once in a thousand bounces). Naive's variance comes from
+/// a hundred or so sun hits, so its estimate is rough: the bound sits a factor 4 below.
 #[test]
 fn importance_sampling_the_sun_beats_bsdf_sampling() {
     let src = sunny_scene(128, 1, false);
@@ -224,7 +238,7 @@ fn importance_sampling_the_sun_beats_bsdf_sampling() {
     let naive = render_with(&src, IntegratorKind::Naive);
     let ratio = total_variance(naive.film()) / total_variance(path.film());
     eprintln!("variance ratio naive / path: {ratio:.2}");
-    assert!(ratio > 20.0, "naive / path variance ratio {ratio:.2}");
+    assert!(ratio > 300.0, "naive / path variance ratio {ratio:.2}");
 }
 
 /// Both estimators have the same mean: the image means of path and naive agree within their
@@ -234,8 +248,8 @@ fn importance_sampling_the_sun_beats_bsdf_sampling() {
 fn importance_and_bsdf_sampling_agree_in_the_mean() {
     let z_limit = bonferroni_z(1e-3, 6);
     for emitter in [false, true] {
-        let path = render_with(&sunny_scene(256, 2, emitter), IntegratorKind::Path);
-        let naive = render_with(&sunny_scene(2048, 3, emitter), IntegratorKind::Naive);
+        let path = render_with(&sunny_scene(1024, 2, emitter), IntegratorKind::Path);
+        let naive = render_with(&sunny_scene(16384, 3, emitter), IntegratorKind::Naive);
         for ch in 0..3 {
             let (mp, sp) = image_mean(path.film(), ch);
             let (mn, sn) = image_mean(naive.film(), ch);
@@ -246,7 +260,7 @@ fn importance_and_bsdf_sampling_agree_in_the_mean() {
                 "emitter {emitter}, channel {ch}: path {mp} ± {sp} vs naive {mn} ± {sn} (z = {z:.2})"
             );
             // Tight enough to see a bias of a few percent.
-            assert!(sp < 0.01 * mp && sn < 0.02 * mn, "{sp} {sn}");
+            assert!(sp < 0.005 * mp && sn < 0.01 * mn, "{sp} {sn}");
         }
     }
 }
@@ -255,8 +269,14 @@ fn importance_and_bsdf_sampling_agree_in_the_mean() {
 #[test]
 fn the_sky_scene_builds_its_map_and_says_so() {
     let scene = ptui::scene::load("sky").expect("built-in");
-    assert_eq!(scene.environment.as_ref().map(|e| e.size()), Some((512, 256)));
-    assert!(scene.report.to_string().contains("environment: map builtin:sky (512x256)"));
+    assert_eq!(
+        scene.environment.as_ref().map(|e| e.size()),
+        Some((512, 256))
+    );
+    assert!(scene
+        .report
+        .to_string()
+        .contains("environment: map builtin:sky (512x256)"));
     let settings = ptui::settings::RenderSettings::merged(&[&scene.render]);
     let why = ptui::integrator::caustics::CausticTracer::new(&scene, &settings)
         .err()
@@ -281,7 +301,11 @@ fn expect_error(src: &str, field: &str, fragment: &str) {
 #[test]
 fn bad_environment_tables_are_refused() {
     let cam = "[camera]\nposition = [0, 0, 5]\n";
-    expect_error(&format!("{cam}[environment]\nintensity = 2\n"), "environment", "needs `map`");
+    expect_error(
+        &format!("{cam}[environment]\nintensity = 2\n"),
+        "environment",
+        "needs `map`",
+    );
     expect_error(
         &format!("{cam}[environment]\nmap = \"builtin:sky\"\ncolor = [1, 1, 1]\n"),
         "environment.map",
@@ -297,9 +321,21 @@ fn bad_environment_tables_are_refused() {
         "environment.rotate",
         "nothing to turn",
     );
-    expect_error(&format!("{cam}[environment]\ncolor = [1, -1, 1]\n"), "environment.color", ">= 0");
-    expect_error(&format!("{cam}[environment]\ncolor = [1, 1, 1]\nintensity = nan\n"), "environment.intensity", "finite");
-    expect_error(&format!("{cam}[environment]\nmap = \"builtin:sky\"\nfoo = 1\n"), "environment", "unknown field");
+    expect_error(
+        &format!("{cam}[environment]\ncolor = [1, -1, 1]\n"),
+        "environment.color",
+        ">= 0",
+    );
+    expect_error(
+        &format!("{cam}[environment]\ncolor = [1, 1, 1]\nintensity = nan\n"),
+        "environment.intensity",
+        "finite",
+    );
+    expect_error(
+        &format!("{cam}[environment]\nmap = \"builtin:sky\"\nfoo = 1\n"),
+        "environment.foo",
+        "unknown field",
+    );
 }
 
 #[test]
@@ -312,23 +348,40 @@ fn bad_maps_get_clear_errors() {
         )
     };
     let missing = dir.path().join("missing.exr");
-    expect_error(&scene(&missing), "environment.map", "cannot open the environment map");
+    expect_error(
+        &scene(&missing),
+        "environment.map",
+        "cannot open the environment map",
+    );
 
     let text = dir.path().join("text.exr");
     std::fs::write(&text, "not an image").expect("write");
     expect_error(&scene(&text), "environment.map", "text.exr");
 
-    for (name, bad) in [("nan", f32::NAN), ("inf", f32::INFINITY), ("negative", -1.0)] {
+    for (name, bad) in [
+        ("nan", f32::NAN),
+        ("inf", f32::INFINITY),
+        ("negative", -1.0),
+    ] {
         let path = dir.path().join(format!("{name}.exr"));
-        write_exr(&path, 8, 4, |x, y| if (x, y) == (5, 2) { [1.0, bad, 1.0] } else { [1.0; 3] });
+        write_exr(&path, 8, 4, |x, y| {
+            if (x, y) == (5, 2) {
+                [1.0, bad, 1.0]
+            } else {
+                [1.0; 3]
+            }
+        });
         expect_error(&scene(&path), "environment.map", "column 5, row 2");
     }
 
     // A Radiance header that claims 65536x32768 texels (8 GiB of floats) and has no pixels:
     // refused from the header, before anything is allocated.
     let huge = dir.path().join("huge.hdr");
-    std::fs::write(&huge, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 32768 +X 65536\n")
-        .expect("write");
+    std::fs::write(
+        &huge,
+        "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 32768 +X 65536\n",
+    )
+    .expect("write");
     expect_error(&scene(&huge), "environment.map", "65536x32768");
 
     let empty = dir.path().join("empty.hdr");
@@ -343,7 +396,11 @@ fn bad_maps_get_clear_errors() {
     write_exr(&black, 4, 2, |_, _| [0.0; 3]);
     let s = try_load(&scene(&black), "ok.toml").expect("a black map is valid");
     assert!(s.environment.is_none());
-    assert!(s.report.environment.contains("black"), "{}", s.report.environment);
+    assert!(
+        s.report.environment.contains("black"),
+        "{}",
+        s.report.environment
+    );
 }
 
 /// A map file's path is relative to the scene file.
