@@ -273,8 +273,10 @@ fn build(
     let (accel, why) = Accel::build(choice, &prims, &probe);
     let camera = focus_camera(camera, desc, &accel, &prims, src, file)?;
     let lights = Lights::new(clip_sphere_lights(lights, &prims));
+    let no_emitters = lights.is_empty();
+    let sky = build_sky(desc, src, file, options, !no_emitters)?;
     let mut light_sampling = match lights.len() {
-        0 if desc.environment.is_some() => "no emitters".to_string(),
+        0 if sky.environment.is_some() => "no emitters".to_string(),
         0 => "off (no emitters)".to_string(),
         1 => format!("1 emitter ({})", sidedness(&lights)),
         n => format!("{n} emitters ({}), chosen by power", sidedness(&lights)),
@@ -290,8 +292,6 @@ fn build(
              point's side is sampled"
         );
     }
-    let no_emitters = lights.is_empty();
-    let sky = build_sky(desc, src, file, options, !no_emitters)?;
     let report = BuildReport {
         accel: format!("{} ({why})", accel.describe(prims.len())),
         light_sampling,
