@@ -143,8 +143,10 @@ pub struct Environment {
 }
 
 impl Environment {
-    /// None when the map is black everywhere (nothing to light or sample).
+    /// None when the map is black everywhere (nothing to light or sample), or fails
+    /// [`EnvMap::check`] (the scene build reports that before it gets here).
     pub fn new(map: &EnvMap, intensity: f64, rotate_degrees: DVec3) -> Option<Environment> {
+        map.check().ok()?;
         let texels: Vec<DVec3> = map
             .texels
             .iter()
