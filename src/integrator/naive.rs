@@ -47,7 +47,7 @@ impl NaivePath {
         max_depth: u32,
     ) -> bool {
         let Some(hit) = hit else {
-            self.l += self.beta * scene.background;
+            self.l += self.beta * scene.sky(self.ray.d);
             return false;
         };
         let material = scene.material(hit);

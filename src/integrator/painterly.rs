@@ -66,7 +66,15 @@ pub fn radiance(
     loop {
         sampler.count_ray();
         let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
-            l += beta * scene.background;
+            match &scene.environment {
+                None => l += beta * scene.background,
+                // As for emission: a painterly vertex's direct light was its light sample's.
+                Some(_) if prev_painterly => {}
+                Some(_) => {
+                    let w = path::env_mis_weight(scene, specular, prev_pdf_bsdf, ray.d);
+                    l += beta * scene.sky(ray.d) * w;
+                }
+            }
             break;
         };
         let material = scene.material(&hit);

@@ -24,6 +24,9 @@ use crate::scene::Scene;
 /// stratification bought about what it cost (benches/HISTORY.md#sequence-depth).
 pub(crate) const SEQUENCE_DEPTH: u32 = 2;
 
+/// The largest f64 below 1: where a light choice's rescaled number must stay.
+const ONE_MINUS_EPS: f64 = 1.0 - f64::EPSILON / 2.0;
+
 /// With `caustics`, the caustics it light-traces and splats are left to it: emission reached from
 /// a non-delta first hit through one or more specular bounces, on the part of a light it covers.
 /// Caustics seen after a bounce (x -> y -> specular chain -> light, x and y non-delta) are shared
@@ -259,10 +262,17 @@ impl PathState {
         self.leave(scene, hit, sampler, caustics)
     }
 
-    /// The path left the scene: the background's radiance.
+    /// The path left the scene: the background's radiance, or the environment map's weighted
+    /// against light sampling, which could have chosen the same direction.
     #[inline(always)]
     fn miss(&mut self, scene: &Scene) {
-        self.l += self.beta * scene.background;
+        match &scene.environment {
+            None => self.l += self.beta * scene.background,
+            Some(_) => {
+                let w = env_mis_weight(scene, self.specular, self.prev_pdf_bsdf, self.ray.d);
+                self.l += self.beta * scene.sky(self.ray.d) * w;
+            }
+        }
     }
 
     /// The first phase at a hit: its emission and the bookkeeping of delta chains. Returns
@@ -567,10 +577,23 @@ pub(crate) fn emission_mis_weight(
 ) -> f64 {
     match prim.light {
         Some(light) => {
-            let pdf_light = scene.lights.pdf(light as usize, prev_p, prev_side, wi, x);
+            // Without an environment map the factor is exactly 1 and the weight the old one.
+            let pdf_light = scene.lights.pdf(light as usize, prev_p, prev_side, wi, x)
+                * (1.0 - scene.env_select);
             power_heuristic(prev_pdf_bsdf, pdf_light)
         }
         None => 1.0,
+    }
+}
+
+/// MIS weight of the environment map's radiance found by a ray leaving along `wi` from a
+/// bounce of pdf `prev_pdf_bsdf` against light sampling; 1 after a delta bounce (or from the
+/// camera), where light sampling could not have found it.
+#[inline]
+pub(crate) fn env_mis_weight(scene: &Scene, specular: bool, prev_pdf_bsdf: f64, wi: DVec3) -> f64 {
+    match &scene.environment {
+        Some(env) if !specular => power_heuristic(prev_pdf_bsdf, scene.env_select * env.pdf(wi)),
+        _ => 1.0,
     }
 }
 
@@ -611,10 +634,41 @@ pub(crate) fn light_shadow(
     beta: DVec3,
 ) -> Option<Shadow> {
     // With one light the choice of light reads no number: its dimension is passed over.
-    let u_light = sampler.get_1d_if(scene.lights.len() > 1);
+    let u_light = sampler.get_1d_if(scene.light_choices() > 1);
     let u = sampler.get_2d();
     let side = spawn_origin(hit.p, hit.n, hit.err, wo);
-    let ls = scene.lights.sample(hit.p, side, u_light, u)?;
+    let ls = match &scene.environment {
+        None => scene.lights.sample(hit.p, side, u_light, u)?,
+        Some(env) if u_light < scene.env_select => {
+            let s = env.sample(u)?;
+            let pdf = s.pdf * scene.env_select;
+            let e = material.eval(wo, s.wi, hit.normals());
+            if e.f_cos.max_element() <= 0.0 {
+                return None;
+            }
+            let w = if mis {
+                power_heuristic(pdf, e.pdf)
+            } else {
+                1.0
+            };
+            // Nothing may be in the way, however far.
+            return Some(Shadow {
+                ray: Ray::new(spawn_origin(hit.p, hit.n, hit.err, s.wi), s.wi),
+                t_max: f64::INFINITY,
+                target: None,
+                value: beta * (e.f_cos * s.le * (w / pdf)),
+            });
+        }
+        Some(_) => {
+            // The rest of the number chooses among the emitters.
+            let u_emitter = (u_light - scene.env_select) / (1.0 - scene.env_select);
+            let mut ls = scene
+                .lights
+                .sample(hit.p, side, u_emitter.min(ONE_MINUS_EPS), u)?;
+            ls.pdf *= 1.0 - scene.env_select;
+            ls
+        }
+    };
     let e = material.eval(wo, ls.wi, hit.normals());
     if e.f_cos.max_element() <= 0.0 || ls.pdf <= 0.0 {
         return None;

@@ -1,6 +1,9 @@
 //! Emitters for next-event estimation: which light to sample (in proportion to power) and how
-//! (sphere lights by the cone of directions they subtend, triangles and quads by area).
+//! (sphere lights by the cone of directions they subtend, triangles and quads by area), and the
+//! environment map's light (`environment`).
 
+pub mod environment;
+pub mod sky;
 pub mod sphere;
 pub mod triangle;
 

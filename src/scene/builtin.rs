@@ -17,6 +17,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
         include_str!("../../scenes/spheres-field.toml"),
     ),
     ("torus-knot", include_str!("../../scenes/torus-knot.toml")),
+    ("sky", include_str!("../../scenes/sky.toml")),
 ];
 
 /// The scene the TUI and `render` open without an argument.

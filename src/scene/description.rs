@@ -2,10 +2,15 @@
 //! as they are read so each error carries the span (hence line) of the offending value.
 //!
 //! ```toml
-//! background = [0, 0, 0]
+//! background = [0, 0, 0]  # a constant sky; or the [environment] table
 //! accel = "auto"           # auto | flat | bvh; top-level keys come before any [table]
 //! [camera]                 # see `camera`
 //! [render]                 # see `settings`
+//!
+//! [environment]            # see `light::environment`
+//! map = "sky.exr"          # or color = [r, g, b]
+//! intensity = 1
+//! rotate = [0, 90, 0]
 //!
 //! [[sphere]]
 //! name = "left"            # optional, unique
@@ -45,6 +50,9 @@ pub struct SceneDesc {
     #[serde(default)]
     pub render: SettingsOverrides,
     pub background: Option<Rgb>,
+    /// Light from all directions at infinity: a map or a constant colour (see
+    /// `light::environment`).
+    pub environment: Option<Spanned<EnvironmentDesc>>,
     #[serde(default)]
     pub sphere: Vec<SphereDesc>,
     /// What `ptui check` expects of this scene: read by the check code from the same text;
@@ -73,6 +81,18 @@ pub struct CameraDesc {
     pub aperture: Option<NonNegative>,
     pub focus_distance: Option<Spanned<Positive>>,
     pub focus_on: Option<Spanned<V3>>,
+}
+
+/// `[environment]`: `map` (an equirectangular EXR/HDR file relative to the scene file, or
+/// `"builtin:sky"`) or `color` (a constant sky), scaled by `intensity` and, for a map, turned by
+/// `rotate` (degrees about x, then y, then z).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentDesc {
+    pub map: Option<Spanned<String>>,
+    pub color: Option<Spanned<Rgb>>,
+    pub intensity: Option<NonNegative>,
+    pub rotate: Option<V3>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]

@@ -12,6 +12,7 @@ use crate::accel::lanes::RayBatch;
 use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Hit, Primitive};
+use crate::light::environment::Environment;
 use crate::light::Lights;
 use crate::material::Material;
 use crate::math::{DVec3, Ray};
@@ -57,6 +58,8 @@ pub fn mesh_triangle_room(so_far: u64) -> (u64, String) {
 pub struct BuildReport {
     pub accel: String,
     pub light_sampling: String,
+    /// What lights the scene from infinity, and how it is sampled.
+    pub environment: String,
     pub build_time: Duration,
     /// Things the build skipped that the user may want to know (OBJ materials).
     pub warnings: Vec<String>,
@@ -66,8 +69,8 @@ impl std::fmt::Display for BuildReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "accel: {}; light sampling: {}",
-            self.accel, self.light_sampling
+            "accel: {}; light sampling: {}; environment: {}",
+            self.accel, self.light_sampling, self.environment
         )?;
         for w in &self.warnings {
             write!(f, "; warning: {w}")?;
@@ -88,7 +91,13 @@ pub struct Scene {
     /// Per primitive, the shading normals of its three corners (all zero: flat); empty when
     /// the scene has no smooth-shaded mesh, so flat scenes pay one bounds check per hit.
     pub shading: Vec<[[f32; 3]; 3]>,
+    /// Radiance of the constant sky (black without one); unused when `environment` is set.
     pub background: DVec3,
+    /// The environment map's light, when the scene has a map that is not black.
+    pub environment: Option<Environment>,
+    /// The probability that next-event estimation samples the environment rather than an
+    /// emitter (1 without emitters; 0 without an environment map).
+    pub env_select: f64,
     /// The scene file's `[render]` table: what it changes from the defaults.
     pub render: SettingsOverrides,
     pub report: BuildReport,
@@ -179,7 +188,22 @@ impl Scene {
 
     /// Whether next-event estimation has anything to aim at.
     pub fn has_lights(&self) -> bool {
-        !self.lights.is_empty()
+        !self.lights.is_empty() || self.environment.is_some()
+    }
+
+    /// Whether light sampling has more than one thing to choose from (then it reads a number
+    /// for the choice).
+    pub fn light_choices(&self) -> usize {
+        self.lights.len() + usize::from(self.environment.is_some())
+    }
+
+    /// Radiance arriving from infinity against unit direction `d` (seen looking along it).
+    #[inline]
+    pub fn sky(&self, d: DVec3) -> DVec3 {
+        match &self.environment {
+            Some(env) => env.le(d),
+            None => self.background,
+        }
     }
 
     pub fn bounds(&self) -> Aabb {

@@ -73,6 +73,11 @@ impl CausticTracer {
             // a disc of pixels, which the joins do not sample.
             return Err("path-traced (a thin-lens camera)".into());
         }
+        if scene.environment.is_some() {
+            // Light paths start on emitters; one from the map would start on a disc at
+            // infinity, which the tracer does not sample.
+            return Err("path-traced (an environment map)".into());
+        }
         if scene.lights.is_empty() {
             return Err("none (no emitters)".into());
         }
