@@ -1,19 +1,19 @@
 //! From TOML text to a validated [`Scene`]: parse, check what the per-value checks cannot
 //! (cross-field constraints, duplicate names), and choose the machinery this scene needs.
 
+use super::camera::{build_camera, focus_camera};
 use super::description::{MaterialDesc, MaterialName, MeshDesc, SceneDesc};
 use super::mesh::{self, Transform};
 use super::mesh_triangle_room;
+use super::sky::build_sky;
 use super::{builtin, BuildReport, Scene, SceneError};
 use crate::accel::{camera_probe, Accel, AccelChoice};
-use crate::camera::Camera;
 use crate::geometry::torus_knot::TorusKnot;
 use crate::geometry::{Primitive, Shape};
 use crate::geometry::{Sphere, Triangle};
-use crate::light::environment::{EnvMap, Environment};
 use crate::light::{sphere::SphereLight, triangle::TriangleLight, Light, Lights};
 use crate::material::{Material, MaterialKind};
-use crate::math::{DVec3, Ray};
+use crate::math::DVec3;
 use crate::progress::Progress;
 use crate::settings::RenderSettings;
 use std::collections::HashSet;
@@ -27,9 +27,6 @@ use toml::Spanned;
 const DEFAULT_COLOR: f64 = 0.75;
 /// Default index of refraction of glass.
 const DEFAULT_IOR: f64 = 1.5;
-/// Default vertical field of view, degrees.
-const DEFAULT_VFOV: f64 = 40.0;
-
 /// Scene-build choices made outside the scene file.
 #[derive(Clone, Debug, Default)]
 pub struct BuildOptions {
@@ -326,116 +323,6 @@ fn build(
     })
 }
 
-/// What lights the scene from infinity.
-struct Sky {
-    background: DVec3,
-    environment: Option<Environment>,
-    /// For the build report.
-    text: String,
-}
-
-/// The sky from `background` or the `[environment]` table; `emitters`: whether the scene has
-/// emitters for the map's light samples to share with.
-fn build_sky(
-    desc: &SceneDesc,
-    src: &str,
-    file: &str,
-    options: &BuildOptions,
-    emitters: bool,
-) -> Result<Sky, SceneError> {
-    let err =
-        |span, field: &str, msg: String| SceneError::at(file, src, span, Some(field.into()), msg);
-    let constant = |c: DVec3| Sky {
-        background: c,
-        environment: None,
-        text: if c == DVec3::ZERO {
-            "black".into()
-        } else {
-            format!(
-                "constant [{}, {}, {}] (found by BSDF sampling)",
-                c.x, c.y, c.z
-            )
-        },
-    };
-    let Some(table) = &desc.environment else {
-        // The old key: the same value, the same code path.
-        return Ok(constant(
-            desc.background
-                .map_or(DVec3::ZERO, |c| DVec3::from_array(c.0)),
-        ));
-    };
-    let span = Some(table.span());
-    if desc.background.is_some() {
-        return Err(err(
-            span,
-            "environment",
-            "give either `background` or an [environment] table, not both".into(),
-        ));
-    }
-    let e = table.get_ref();
-    let intensity = e.intensity.map_or(1.0, |i| i.0);
-    let map = match (&e.map, &e.color) {
-        (Some(map), Some(_)) => {
-            return Err(err(
-                Some(map.span()),
-                "environment.map",
-                "give either `map` or `color`, not both".into(),
-            ))
-        }
-        (None, None) => {
-            return Err(err(
-                span,
-                "environment",
-                "the table needs `map` (an EXR or HDR file, or \"builtin:sky\") or `color`".into(),
-            ))
-        }
-        (None, Some(color)) => {
-            if e.rotate.is_some() {
-                return Err(err(
-                    span,
-                    "environment.rotate",
-                    "`rotate` turns a `map`; a constant `color` has nothing to turn".into(),
-                ));
-            }
-            return Ok(constant(DVec3::from_array(color.get_ref().0) * intensity));
-        }
-        (Some(map), None) => map,
-    };
-    let name = map.get_ref();
-    let texels = if name == BUILTIN_SKY {
-        EnvMap::builtin_sky()
-    } else {
-        let full = match &options.base_dir {
-            Some(base) => base.join(name),
-            None => PathBuf::from(name),
-        };
-        EnvMap::read(&full).map_err(|msg| err(Some(map.span()), "environment.map", msg))?
-    };
-    let rotate = e.rotate.map_or(DVec3::ZERO, |r| DVec3::from_array(r.0));
-    let environment = Environment::new(&texels, intensity, rotate);
-    let text = match &environment {
-        Some(_) => format!(
-            "map {name} ({}x{}), importance-sampled{}",
-            texels.width,
-            texels.height,
-            if emitters {
-                " in half of the light samples, MIS with BSDF sampling"
-            } else {
-                ", MIS with BSDF sampling"
-            }
-        ),
-        None => format!("map {name} is black (no light)"),
-    };
-    Ok(Sky {
-        background: DVec3::ZERO,
-        environment,
-        text,
-    })
-}
-
-/// `map` naming the generated sky instead of a file.
-pub const BUILTIN_SKY: &str = "builtin:sky";
-
 /// Sphere lights cut by other spheres' surfaces learn the cuts, so light sampling can leave out
 /// the parts hidden behind them (see `light::sphere`).
 fn clip_sphere_lights(lights: Vec<Light>, prims: &[Primitive]) -> Vec<Light> {
@@ -547,125 +434,6 @@ fn build_mesh(
         .map_err(|msg| b.err(None, object.to_string(), msg))?;
     b.mesh_triangles += built.triangles.len() as u64;
     Ok(built)
-}
-
-fn build_camera(desc: &SceneDesc, src: &str, file: &str) -> Result<Camera, SceneError> {
-    let c = &desc.camera;
-    let position = c.position.map_or(DVec3::ZERO, |p| DVec3::from_array(p.0));
-    let forward = match (&c.direction, &c.look_at) {
-        (Some(_), Some(look_at)) => {
-            return Err(SceneError::at(
-                file,
-                src,
-                Some(look_at.span()),
-                Some("camera.look_at".into()),
-                "give either `direction` or `look_at`, not both",
-            ))
-        }
-        (Some(d), None) => DVec3::from_array(d.get_ref().0),
-        (None, Some(target)) => {
-            let d = DVec3::from_array(target.get_ref().0) - position;
-            // Not just d == 0: a difference so small its square underflows cannot be normalised.
-            if d.try_normalize().is_none() {
-                return Err(SceneError::at(
-                    file,
-                    src,
-                    Some(target.span()),
-                    Some("camera.look_at".into()),
-                    "the camera looks at its own position",
-                ));
-            }
-            d
-        }
-        (None, None) => -DVec3::Z,
-    };
-    let up =
-        c.up.as_ref()
-            .map_or(DVec3::Y, |u| DVec3::from_array(u.get_ref().0));
-    let sin = forward.normalize().cross(up.normalize()).length();
-    if sin < 1e-6 {
-        let span =
-            c.up.as_ref()
-                .map(|u| u.span())
-                .or_else(|| c.direction.as_ref().map(|d| d.span()))
-                .or_else(|| c.look_at.as_ref().map(|d| d.span()));
-        return Err(SceneError::at(
-            file,
-            src,
-            span,
-            Some("camera.up".into()),
-            "the up vector is parallel to the view direction",
-        ));
-    }
-    let vfov = c.vfov.map_or(DEFAULT_VFOV, |f| f.0);
-    let near = c.near.map_or(0.0, |n| n.0);
-    Ok(Camera::new(position, forward, up, vfov, near))
-}
-
-/// The camera with its lens: `aperture`, and the focus plane at `focus_distance`, through
-/// `focus_on`, or by default at the first surface the centre ray hits (the scene's centre if it
-/// hits nothing), so a lens without a focus setting is sharp where the camera looks.
-fn focus_camera(
-    camera: Camera,
-    desc: &SceneDesc,
-    accel: &Accel,
-    prims: &[Primitive],
-    src: &str,
-    file: &str,
-) -> Result<Camera, SceneError> {
-    let c = &desc.camera;
-    let aperture = c.aperture.map_or(0.0, |a| a.0);
-    let focus = match (&c.focus_distance, &c.focus_on) {
-        (Some(_), Some(on)) => {
-            return Err(SceneError::at(
-                file,
-                src,
-                Some(on.span()),
-                Some("camera.focus_on".into()),
-                "give either `focus_distance` or `focus_on`, not both",
-            ))
-        }
-        (Some(f), None) => f.get_ref().0,
-        (None, Some(on)) => {
-            let z = (DVec3::from_array(on.get_ref().0) - camera.position).dot(camera.forward);
-            if z.is_nan() || z <= 0.0 {
-                return Err(SceneError::at(
-                    file,
-                    src,
-                    Some(on.span()),
-                    Some("camera.focus_on".into()),
-                    format!(
-                        "the point is not in front of the camera (distance {z:e} along the view)"
-                    ),
-                ));
-            }
-            z
-        }
-        (None, None) => default_focus(&camera, accel, prims),
-    };
-    Ok(camera.with_lens(aperture, focus))
-}
-
-/// Distance along the view to the first surface the centre ray hits (from `near` on); the scene's centre if it
-/// hits nothing in front of the camera; 1 for an empty scene.
-pub fn default_focus(camera: &Camera, accel: &Accel, prims: &[Primitive]) -> f64 {
-    // The centre ray starts `near` along the view like every camera ray (smallpt's starts
-    // past its front wall).
-    let ray = Ray::new(
-        camera.position + camera.forward * camera.near,
-        camera.forward,
-    );
-    if let Some(hit) = accel.intersect(prims, &ray, f64::INFINITY) {
-        return camera.near + hit.t;
-    }
-    let bounds = prims
-        .iter()
-        .map(|p| p.shape.bounds())
-        .reduce(|a, b| a.union(b));
-    bounds
-        .map(|b| (b.centroid() - camera.position).dot(camera.forward))
-        .filter(|z| *z > 0.0 && z.is_finite())
-        .unwrap_or(1.0)
 }
 
 /// How many of the lights emit from one face, from both, and outwards (spheres), for the summary.

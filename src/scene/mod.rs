@@ -2,11 +2,13 @@
 //! (accelerator, light sampling) chosen for this scene.
 
 pub mod builtin;
+mod camera;
 pub mod description;
 pub mod error;
 pub mod load;
 pub mod mesh;
 pub mod obj;
+mod sky;
 
 use crate::accel::lanes::RayBatch;
 use crate::accel::Accel;
