@@ -119,6 +119,8 @@ pub struct BuildNotes {
     pub accel: String,
     pub light_sampling: String,
     pub caustics: String,
+    /// What lights the scene from infinity (`BuildReport::environment`).
+    pub environment: String,
     pub build_time: std::time::Duration,
 }
 
@@ -145,6 +147,12 @@ impl BuildNotes {
             match head(&self.caustics, 0) {
                 "" => String::new(),
                 c => format!("caustics {c}"),
+            },
+            // A map is light the emitter count does not show; a constant sky is not.
+            if self.environment.starts_with("map") && !self.environment.contains("black") {
+                "sky map".to_string()
+            } else {
+                String::new()
             },
         ];
         let parts: Vec<String> = parts.into_iter().filter(|p| !p.is_empty()).collect();
@@ -399,6 +407,7 @@ impl Worker {
                 accel: scene.report.accel.clone(),
                 light_sampling: scene.report.light_sampling.clone(),
                 caustics: job.renderer.caustics_note().to_string(),
+                environment: scene.report.environment.clone(),
                 build_time: scene.report.build_time,
             },
             threads: job.renderer.threads(),

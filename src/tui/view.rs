@@ -608,6 +608,9 @@ fn draw_details(frame: &mut Frame, app: &App, area: Rect) {
     rows.push(("accel", app.notes.accel.clone()));
     rows.push(("lights", app.notes.light_sampling.clone()));
     rows.push(("caustics", app.notes.caustics.clone()));
+    if !app.notes.environment.is_empty() && app.notes.environment != "black" {
+        rows.push(("sky", app.notes.environment.clone()));
+    }
     let colours = match (app.color_mode, app.form.color) {
         (super::color::ColorMode::Truecolor, _) => "truecolor".to_string(),
         (_, super::color::ColorChoice::Auto) => COLOR_HINTS[0].to_string(),
@@ -677,6 +680,7 @@ mod tests {
             caustics: "light-traced (2689 paths per pass towards 2 mirror/glass sphere(s); 81% \
                        of a pilot's paths reached the camera)"
                 .into(),
+            environment: "black".into(),
             build_time: Duration::from_micros(400),
         }
     }
@@ -914,9 +918,11 @@ mod tests {
             accel: "BVH, 1200 objects, 2399 nodes, built in 1.2 ms (auto: ...)".into(),
             light_sampling: "none (no emitters)".into(),
             caustics: String::new(),
+            environment: "map builtin:sky (512x256), importance-sampled, MIS with BSDF sampling"
+                .into(),
             build_time: Duration::ZERO,
         };
-        assert_eq!(bvh.short(), "BVH, 1200 objects · none");
+        assert_eq!(bvh.short(), "BVH, 1200 objects · none · sky map");
     }
 
     #[test]
