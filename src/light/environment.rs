@@ -73,10 +73,18 @@ impl EnvMap {
     /// The built-in sky (`map = "builtin:sky"`, see [`sky`]).
     pub fn builtin_sky() -> EnvMap {
         let (width, height) = (sky::WIDTH, sky::HEIGHT);
+        EnvMap::from_fn(width, height, |x, y| sky::texel(x, y, width, height))
+    }
+
+    /// A `width` x `height` map of texels `f(x, y)` (row 0 at the top).
+    pub fn from_fn(width: usize, height: usize, f: impl Fn(usize, usize) -> [f32; 3]) -> EnvMap {
+        let texels = (0..width * height)
+            .map(|i| f(i % width, i / width))
+            .collect();
         EnvMap {
             width,
             height,
-            texels: sky::texels(width, height),
+            texels,
         }
     }
 
@@ -263,21 +271,11 @@ mod tests {
     use super::*;
     use crate::sampling::{warp, Rng};
 
-    fn map(width: usize, height: usize, f: impl Fn(usize, usize) -> [f32; 3]) -> EnvMap {
-        let texels = (0..width * height)
-            .map(|i| f(i % width, i / width))
-            .collect();
-        EnvMap {
-            width,
-            height,
-            texels,
-        }
-    }
-
     /// Mitsuba's convention: +y is row 0, -z the left edge, +x a quarter across, +z the centre.
     #[test]
     fn directions_map_as_in_mitsuba() {
-        let env = Environment::new(&map(4, 2, |_, _| [1.0; 3]), 1.0, DVec3::ZERO).expect("lit");
+        let env = Environment::new(&EnvMap::from_fn(4, 2, |_, _| [1.0; 3]), 1.0, DVec3::ZERO)
+            .expect("lit");
         let uv = |d: DVec3| env.uv(d.normalize());
         assert!(uv(DVec3::new(0.0, 1.0, 0.0)).1 < 1e-9);
         assert!((uv(DVec3::new(0.0, -1.0, 0.0)).1 - 1.0).abs() < 1e-9);
@@ -296,7 +294,7 @@ mod tests {
     /// Rotating the map by 90 degrees about y turns what was seen along -z to be seen along -x.
     #[test]
     fn rotation_turns_the_map() {
-        let m = map(4, 1, |x, _| [x as f32 + 1.0; 3]);
+        let m = EnvMap::from_fn(4, 1, |x, _| [x as f32 + 1.0; 3]);
         let plain = Environment::new(&m, 1.0, DVec3::ZERO).expect("lit");
         let turned = Environment::new(&m, 1.0, DVec3::new(0.0, 90.0, 0.0)).expect("lit");
         let minus_z = DVec3::new(0.0, 0.0, -1.0) + DVec3::new(1e-9, 0.0, 0.0);
@@ -310,13 +308,17 @@ mod tests {
 
     #[test]
     fn a_black_map_is_no_light() {
-        assert!(Environment::new(&map(8, 4, |_, _| [0.0; 3]), 1.0, DVec3::ZERO).is_none());
-        assert!(Environment::new(&map(8, 4, |_, _| [1.0; 3]), 0.0, DVec3::ZERO).is_none());
+        assert!(
+            Environment::new(&EnvMap::from_fn(8, 4, |_, _| [0.0; 3]), 1.0, DVec3::ZERO).is_none()
+        );
+        assert!(
+            Environment::new(&EnvMap::from_fn(8, 4, |_, _| [1.0; 3]), 0.0, DVec3::ZERO).is_none()
+        );
     }
 
     #[test]
     fn bad_maps_are_refused() {
-        let nan = map(4, 2, |x, _| {
+        let nan = EnvMap::from_fn(4, 2, |x, _| {
             if x == 3 {
                 [0.0, f32::NAN, 0.0]
             } else {
@@ -324,8 +326,12 @@ mod tests {
             }
         });
         assert!(nan.check().unwrap_err().contains("column 3, row 0"));
-        assert!(map(4, 2, |_, _| [-1.0, 0.0, 0.0]).check().is_err());
-        assert!(map(4, 2, |_, _| [f32::INFINITY; 3]).check().is_err());
+        assert!(EnvMap::from_fn(4, 2, |_, _| [-1.0, 0.0, 0.0])
+            .check()
+            .is_err());
+        assert!(EnvMap::from_fn(4, 2, |_, _| [f32::INFINITY; 3])
+            .check()
+            .is_err());
         let empty = EnvMap {
             width: 0,
             height: 0,
@@ -341,7 +347,7 @@ mod tests {
     /// averages to the integral of the map over the sphere.
     #[test]
     fn sampling_is_consistent_and_unbiased() {
-        let m = map(16, 8, |x, y| [(x * y % 5) as f32 + 0.1, 1.0, 0.5]);
+        let m = EnvMap::from_fn(16, 8, |x, y| [(x * y % 5) as f32 + 0.1, 1.0, 0.5]);
         let env = Environment::new(&m, 2.0, DVec3::new(10.0, 20.0, 30.0)).expect("lit");
         let mut rng = Rng::new(9);
         let n = 200_000;

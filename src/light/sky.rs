@@ -41,32 +41,24 @@ pub fn radiance(d: DVec3) -> DVec3 {
     }
 }
 
-/// The texels of a `width` x `height` map, each the radiance at its centre (row 0 at the top).
-pub fn texels(width: usize, height: usize) -> Vec<[f32; 3]> {
-    let mut out = Vec::with_capacity(width * height);
-    for y in 0..height {
-        let theta = PI * (y as f64 + 0.5) / height as f64;
-        for x in 0..width {
-            let phi = 2.0 * PI * (x as f64 + 0.5) / width as f64;
-            let d = DVec3::new(
-                phi.sin() * theta.sin(),
-                theta.cos(),
-                -phi.cos() * theta.sin(),
-            );
-            let l = radiance(d);
-            out.push([l.x as f32, l.y as f32, l.z as f32]);
-        }
-    }
-    out
+/// Texel (`x`, `y`) of a `width` x `height` map: the radiance at its centre (row 0 at the top).
+pub fn texel(x: usize, y: usize, width: usize, height: usize) -> [f32; 3] {
+    let theta = PI * (y as f64 + 0.5) / height as f64;
+    let phi = 2.0 * PI * (x as f64 + 0.5) / width as f64;
+    let d = DVec3::new(
+        phi.sin() * theta.sin(),
+        theta.cos(),
+        -phi.cos() * theta.sin(),
+    );
+    let l = radiance(d);
+    [l.x as f32, l.y as f32, l.z as f32]
 }
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
     #[test]
     fn the_sun_is_in_the_map() {
-        let t = texels(WIDTH, HEIGHT);
+        let t = crate::light::environment::EnvMap::builtin_sky().texels;
         let suns = t.iter().filter(|p| p[0] > 100.0).count();
         // The disc's solid angle, 2 pi (1 - cos 2 deg), over a texel's at 35 degrees'
         // elevation: about 40 texels.

@@ -464,26 +464,17 @@ fn tiny_sphere_light_keeps_its_cone() {
 
 /// A map with smooth variation, a bright patch and a dim band (row 0 at the top).
 fn test_map() -> EnvMap {
-    let (width, height) = (48usize, 24usize);
-    let texels = (0..width * height)
-        .map(|i| {
-            let (x, y) = (i % width, i / width);
-            if (14..16).contains(&y) {
-                return [0.02; 3];
-            }
-            let base = 1.0 + ((x * 7 + y * 3) % 5) as f32;
-            if (30..34).contains(&x) && (5..8).contains(&y) {
-                [60.0, 50.0, 40.0]
-            } else {
-                [base, 0.5 * base, 0.2]
-            }
-        })
-        .collect();
-    EnvMap {
-        width,
-        height,
-        texels,
-    }
+    EnvMap::from_fn(48, 24, |x, y| {
+        if (14..16).contains(&y) {
+            return [0.02; 3];
+        }
+        let base = 1.0 + ((x * 7 + y * 3) % 5) as f32;
+        if (30..34).contains(&x) && (5..8).contains(&y) {
+            [60.0, 50.0, 40.0]
+        } else {
+            [base, 0.5 * base, 0.2]
+        }
+    })
 }
 
 /// The 2D distribution's samples fall in its cells in proportion to the function it was built
