@@ -5,9 +5,10 @@
 use crate::common::{load_str, render};
 use ptui::analysis::stats::bonferroni_z;
 use ptui::render::film::Film;
-use ptui::scene::{load_str as try_load, SceneError};
+use ptui::scene::{load_str as try_load, Scene, SceneError};
 use ptui::settings::{IntegratorKind, SettingsOverrides};
 use std::path::Path;
+use std::sync::Arc;
 
 /// Write a `width` x `height` EXR of texels `f(x, y)`.
 fn write_exr(path: &Path, width: u32, height: u32, f: impl Fn(u32, u32) -> [f32; 3]) {
@@ -62,6 +63,16 @@ fn coverage(scene: &ptui::scene::Scene, w: u32, h: u32) -> Vec<Option<bool>> {
         .collect()
 }
 
+/// The furnaces' sphere.
+const ALBEDO: f64 = 0.6;
+
+/// Render the furnace `scene` (a sphere of [`ALBEDO`] under a sky of radiance `l`) and check it.
+fn check_furnace(scene: Arc<Scene>, integrator: IntegratorKind, l: [f64; 3], what: &str) {
+    let cover = coverage(&scene, 16, 16);
+    let r = render_scene(scene, integrator);
+    assert_sky_furnace(r.film(), &cover, ALBEDO, l, what);
+}
+
 /// Every pixel on the sphere reads albedo x L, every pixel of sky L: each within its standard
 /// error (Bonferroni over the pixels; a tiny absolute floor for pixels whose samples are all
 /// equal, as BSDF sampling of a constant sky gives).
@@ -98,21 +109,11 @@ fn furnace_under_a_constant_color() {
     for integrator in [IntegratorKind::Path, IntegratorKind::Naive] {
         let scene = load_str(&furnace_scene(
             "[environment]\ncolor = [0.5, 1.0, 2.0]\nintensity = 2",
-            0.6,
+            ALBEDO,
         ));
-        let cover = coverage(&scene, 16, 16);
-        let r = render(
+        check_furnace(
             scene,
-            &SettingsOverrides {
-                integrator: Some(integrator),
-                ..Default::default()
-            },
-        );
-        assert_eq!(r.stats().invalid, 0);
-        assert_sky_furnace(
-            r.film(),
-            &cover,
-            0.6,
+            integrator,
             [1.0, 2.0, 4.0],
             &format!("{integrator:?}"),
         );
@@ -133,29 +134,15 @@ fn furnace_under_a_constant_map() {
             path.to_str().expect("utf-8")
         );
         for integrator in [IntegratorKind::Path, IntegratorKind::Naive] {
-            let scene = load_str(&furnace_scene(&sky, 0.6));
+            let scene = load_str(&furnace_scene(&sky, ALBEDO));
             assert!(scene.environment.is_some());
             assert!(
                 scene.report.environment.contains("importance-sampled"),
                 "{}",
                 scene.report.environment
             );
-            let cover = coverage(&scene, 16, 16);
-            let r = render(
-                scene,
-                &SettingsOverrides {
-                    integrator: Some(integrator),
-                    ..Default::default()
-                },
-            );
-            assert_eq!(r.stats().invalid, 0);
-            assert_sky_furnace(
-                r.film(),
-                &cover,
-                0.6,
-                [0.5, 1.0, 2.0],
-                &format!("{w}x{h} map, {integrator:?}"),
-            );
+            let label = format!("{w}x{h} map, {integrator:?}");
+            check_furnace(scene, integrator, [0.5, 1.0, 2.0], &label);
         }
     }
 }
@@ -214,8 +201,13 @@ fn total_variance(film: &Film) -> f64 {
 }
 
 fn render_with(src: &str, integrator: IntegratorKind) -> ptui::render::Renderer {
+    render_scene(load_str(src), integrator)
+}
+
+/// Render `scene` with `integrator` at its own settings; no sample may be invalid.
+fn render_scene(scene: Arc<Scene>, integrator: IntegratorKind) -> ptui::render::Renderer {
     let r = render(
-        load_str(src),
+        scene,
         &SettingsOverrides {
             integrator: Some(integrator),
             ..Default::default()
