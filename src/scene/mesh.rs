@@ -24,6 +24,7 @@ use crate::progress::Progress;
 use glam::DMat3;
 use rayon::prelude::*;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Scale, then rotate (degrees about x, then y, then z), then translate.
 #[derive(Clone, Copy, Debug)]
@@ -66,17 +67,15 @@ impl Transform {
     pub fn apply_mesh(&self, mesh: Mesh) -> Result<Mesh, String> {
         let m = self.matrix();
         let rot = self.matrix() * (1.0 / self.scale);
-        let place = |t: &Triangle| t.p().map(|v| DVec3::from(m * v.to_glam()) + self.translate);
-        // In parallel (a large mesh is seconds of work on one thread), collected in order.
-        if mesh
-            .triangles
-            .par_iter()
-            .any(|t| !place(t).iter().all(|v| v.is_finite()))
-        {
-            return Err("a vertex is not a finite number".into());
-        }
+        // In parallel (a large mesh is seconds of work on one thread), collected in order; a
+        // non-finite vertex drops its triangle and fails the whole mesh below.
+        let non_finite = AtomicBool::new(false);
         let placed = |t: &Triangle| {
-            let p = place(t);
+            let p = t.p().map(|v| DVec3::from(m * v.to_glam()) + self.translate);
+            if !p.iter().all(|v| v.is_finite()) {
+                non_finite.store(true, Ordering::Relaxed);
+                return None;
+            }
             let t = Triangle::new(p[0], p[1], p[2]);
             t.normal().is_some().then_some(t)
         };
@@ -99,6 +98,9 @@ impl Transform {
                 })
                 .unzip()
         };
+        if non_finite.load(Ordering::Relaxed) {
+            return Err("a vertex is not a finite number".into());
+        }
         Ok(Mesh {
             triangles,
             normals,
@@ -226,5 +228,20 @@ mod tests {
         // x -> 2x -> rotated 90 degrees about z to 2y -> shifted by 10 in x.
         assert!((out[0].p()[1] - DVec3::new(10.0, 2.0, 0.0)).length() < 1e-12);
         assert!((out[0].p()[2] - DVec3::new(8.0, 0.0, 0.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn a_transform_that_overflows_a_vertex_is_an_error() {
+        let t = Transform {
+            scale: 1e300,
+            ..Transform::default()
+        };
+        let tris = [
+            Triangle::new(DVec3::ZERO, DVec3::X, DVec3::Y),
+            Triangle::new(DVec3::ZERO, DVec3::X * 1e10, DVec3::Y),
+        ];
+        let err = t.apply(&tris).expect_err("overflows");
+        assert!(err.contains("not a finite number"), "{err}");
+        assert_eq!(Transform::default().apply(&tris).map(|v| v.len()), Ok(2));
     }
 }
