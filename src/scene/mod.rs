@@ -43,7 +43,8 @@ pub fn mesh_triangle_room(so_far: u64) -> (u64, String) {
         Some(avail) if avail / BUILD_BYTES_PER_TRIANGLE < MAX_MESH_TRIANGLES => (
             (avail / BUILD_BYTES_PER_TRIANGLE).saturating_sub(so_far),
             format!(
-                "at about {BUILD_BYTES_PER_TRIANGLE} bytes a triangle for the triangles and their                  BVH, the {} of memory available hold {} mesh triangles per scene",
+                "at about {BUILD_BYTES_PER_TRIANGLE} bytes a triangle for the triangles and their \
+                 BVH, the {} of memory available hold {} mesh triangles per scene",
                 crate::settings::human_bytes(avail),
                 avail / BUILD_BYTES_PER_TRIANGLE
             ),

@@ -113,7 +113,8 @@ fn too_many_triangles_is_an_error_before_generating_them() {
         text.contains("20000000000 triangles")
             && text.contains("big.toml:2")
             && text.contains("room for")
-            && text.contains("mesh triangles per scene"),
+            && text.contains("mesh triangles per scene")
+            && !text.contains("  "),
         "{text}"
     );
 }
