@@ -3,6 +3,7 @@
 //! ([`with_integrator`]), for one path ([`radiance`]) and for a row of them ([`radiance_row`]).
 
 pub mod caustics;
+pub(crate) mod direct;
 pub mod naive;
 pub mod painterly;
 pub mod path;

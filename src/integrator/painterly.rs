@@ -30,7 +30,7 @@ pub mod stream;
 
 use self::bounce::painterly_direction;
 use self::stream::PaintStream;
-use super::{path, russian_roulette};
+use super::{direct, path, russian_roulette};
 use crate::geometry::{spawn_origin, Normals};
 use crate::material::{fresnel, BsdfSample, Material, MaterialKind};
 use crate::math::{DVec3, Ray};
@@ -71,7 +71,7 @@ pub fn radiance(
                 // As for emission: a painterly vertex's direct light was its light sample's.
                 Some(_) if prev_painterly => {}
                 Some(_) => {
-                    let w = path::env_mis_weight(scene, specular, prev_pdf_bsdf, ray.d);
+                    let w = direct::env_mis_weight(scene, specular, prev_pdf_bsdf, ray.d);
                     l += beta * scene.sky(ray.d) * w;
                 }
             }
@@ -84,7 +84,7 @@ pub fn radiance(
             let weight = match prim.light {
                 // Direct light of a painterly vertex was counted by its light sample alone.
                 Some(_) if prev_painterly && nee => 0.0,
-                Some(_) if !specular && nee => path::emission_mis_weight(
+                Some(_) if !specular && nee => direct::emission_mis_weight(
                     scene,
                     prim,
                     prev_p,
@@ -104,7 +104,7 @@ pub fn radiance(
         let paint_here = paints(material) && stream.paints(depth);
 
         if nee && !material.is_delta() {
-            l += beta * path::direct_light(scene, &hit, wo, material, sampler, !paint_here);
+            l += beta * direct::direct_light(scene, &hit, wo, material, sampler, !paint_here);
         } else if nee {
             // Keep the dimension count per bounce fixed, exactly as `path` does.
             sampler.get_1d();

@@ -7,7 +7,7 @@
 //! Both are generic and `#[inline(always)]`: each integrator gets its own copy, with its vertex
 //! inlined, inside the row tracer's CPU-specific copies (`render::sample_row`).
 
-use super::path::Shadow;
+use super::direct::Shadow;
 use crate::accel::lanes::RayBatch;
 use crate::geometry::Hit;
 use crate::math::{DVec3, Ray};
