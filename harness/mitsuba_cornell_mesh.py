@@ -20,14 +20,13 @@ Run through harness/mitsuba_cornell_mesh.sh, which makes a virtual environment w
 """
 
 import argparse
-import math
 import os
 import sys
 import tempfile
-import time
 import tomllib
 
 import numpy as np
+from mitsuba_passes import Passes
 
 VFOV_KEYS = {"position", "look_at", "up", "vfov", "near", "direction"}
 QUAD_KEYS = {"name", "corner", "edge1", "edge2", "color", "emission", "material"}
@@ -238,14 +237,6 @@ def check_conventions(mi, scene, lights):
             raise SystemExit(f"Mitsuba's rgb texture turns {value} into {got}")
 
 
-def atomic_write_text(path, text):
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path) or ".", suffix=".tmp")
-    with os.fdopen(fd, "w") as f:
-        f.write(text)
-    os.chmod(tmp, 0o644)  # mkstemp makes it private
-    os.replace(tmp, path)
-
-
 def main():
     here = os.path.dirname(os.path.abspath(__file__))
     root = os.path.dirname(here)
@@ -282,33 +273,9 @@ def main():
         scene = mi.load_dict(desc)
         check_conventions(mi, scene, lights)
 
-        h, w = args.height, args.width
-        total = np.zeros((h, w, 3))
-        total2 = np.zeros((h, w, 3))
-        t0 = time.time()
-        for k in range(args.passes):
-            img = np.array(mi.render(scene, seed=args.seed + k, spp=args.spp), dtype=np.float64)
-            img = img[:, :, :3]
-            if not np.isfinite(img).all():
-                sys.exit(f"pass {k}: non-finite pixels")
-            total += img
-            total2 += img * img
-            print(
-                f"pass {k + 1}/{args.passes}: means {img.reshape(-1, 3).mean(0)} "
-                f"({time.time() - t0:.0f} s)",
-                flush=True,
-            )
-        seconds = time.time() - t0
+        passes = Passes(mi, scene, args.spp, args.passes, args.seed)
 
-    n = args.passes
-    mean = total / n
-    # Unbiased variance of one pass across passes; the mean's is that over n.
-    var_pass = np.maximum(total2 - n * mean * mean, 0) / (n - 1)
-    se = np.sqrt(var_pass / n)
-    noise_rmse = math.sqrt((se**2).mean())
-    ch_mean = mean.reshape(-1, 3).mean(0)
-    # Standard error of each channel's image mean, from the passes' image means.
-    ch_se = np.sqrt(var_pass.reshape(-1, 3).sum(0)) / (h * w) / math.sqrt(n)
+    mean, w = passes.mean, args.width
     # The red wall (high x) must be on the left and the green one on the right, as ptui draws
     # this scene: redder on the left than on the right.
     left = mean[:, : w // 2].reshape(-1, 3).mean(0)
@@ -316,26 +283,17 @@ def main():
     if not left[0] / left[1] > right[0] / right[1]:
         sys.exit(f"red wall not on the left: left half {left}, right half {right}")
 
-    out = args.out
-    os.makedirs(os.path.dirname(out) or ".", exist_ok=True)
-    bmp = mi.Bitmap(mean.astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB)
-    tmp = out + ".tmp.exr"
-    bmp.write(tmp)
-    os.replace(tmp, out)
-    stats = (
-        f"# {os.path.basename(out)}: written by harness/mitsuba_cornell_mesh.py; do not edit\n"
-        f"scene = {os.path.relpath(args.scene, root)}\n"
-        f"lights = {'two-sided (validation)' if args.two_sided else 'one-sided'}\n"
-        f"renderer = Mitsuba {mi.__version__}, {args.variant}, path, max_depth -1, box filter\n"
-        f"size = {w}x{h}\n"
-        f"spp = {args.spp * n} ({n} independent passes of {args.spp}, seeds {args.seed}..{args.seed + n - 1})\n"
-        f"seconds = {seconds:.0f} ({os.cpu_count()} cores)\n"
-        f"mean = {ch_mean[0]:.6f} {ch_mean[1]:.6f} {ch_mean[2]:.6f}\n"
-        f"mean_standard_error = {ch_se[0]:.7f} {ch_se[1]:.7f} {ch_se[2]:.7f}\n"
-        f"noise_rmse = {noise_rmse:.6f}\n"
+    passes.write(
+        mi,
+        args.out,
+        root,
+        __file__,
+        [
+            f"scene = {os.path.relpath(args.scene, root)}",
+            f"lights = {'two-sided (validation)' if args.two_sided else 'one-sided'}",
+            f"renderer = Mitsuba {mi.__version__}, {args.variant}, path, max_depth -1, box filter",
+        ],
     )
-    atomic_write_text(os.path.splitext(out)[0] + ".txt", stats)
-    print(stats, end="")
 
 
 if __name__ == "__main__":

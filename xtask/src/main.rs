@@ -11,6 +11,7 @@ mod error_breakdown;
 mod gen_extreme;
 mod gen_spheres_field;
 mod probe_limits;
+mod sky_map;
 mod smallpt;
 
 use clap::{Parser, Subcommand};
@@ -64,6 +65,9 @@ enum Task {
         reference: PathBuf,
         heat: Option<PathBuf>,
     },
+    /// Write the built-in sky map (`builtin:sky`) as a linear EXR, texel for texel (the Mitsuba
+    /// reference of the `sky` scene is lit by it: harness/mitsuba_sky.sh).
+    SkyMap { out: PathBuf },
     /// A terminal capture with colour escapes (`tmux capture-pane -p -e`) to a PNG.
     AnsiToPng {
         capture: PathBuf,
@@ -96,6 +100,7 @@ fn main() -> anyhow::Result<()> {
             reference,
             heat,
         } => error_breakdown::run(&image, &reference, heat.as_deref()),
+        Task::SkyMap { out } => sky_map::run(&out),
         Task::AnsiToPng { capture, out, font } => ansi_to_png::run(&capture, &out, font.as_deref()),
     }
 }
