@@ -8,6 +8,7 @@ mod bench_error;
 mod caustic_memory;
 mod embree_workloads;
 mod error_breakdown;
+mod export_mesh;
 mod gen_extreme;
 mod gen_spheres_field;
 mod probe_limits;
@@ -68,6 +69,9 @@ enum Task {
     /// Write the built-in sky map (`builtin:sky`) as a linear EXR, texel for texel (the Mitsuba
     /// reference of the `sky` scene is lit by it: harness/mitsuba_sky.sh).
     SkyMap { out: PathBuf },
+    /// Write each `[[mesh]]` of a scene file as ptui places it (its triangles and shading
+    /// normals) to DIR/mesh<i>.ply, for the Mitsuba reference harness (harness/mitsuba_mesh.py).
+    ExportMeshes { scene: PathBuf, dir: PathBuf },
     /// A terminal capture with colour escapes (`tmux capture-pane -p -e`) to a PNG.
     AnsiToPng {
         capture: PathBuf,
@@ -101,6 +105,7 @@ fn main() -> anyhow::Result<()> {
             heat,
         } => error_breakdown::run(&image, &reference, heat.as_deref()),
         Task::SkyMap { out } => sky_map::run(&out),
+        Task::ExportMeshes { scene, dir } => export_mesh::run(&scene, &dir),
         Task::AnsiToPng { capture, out, font } => ansi_to_png::run(&capture, &out, font.as_deref()),
     }
 }
