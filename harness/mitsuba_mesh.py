@@ -1,0 +1,563 @@
+#!/usr/bin/env python3
+"""Render a ptui scene of quads, spheres and meshes with Mitsuba 3: references for
+tests/integration/reference_mesh.rs (`torus-knot`, `spot`) and the equal-time runs of
+harness/equal_time.sh.
+
+The scene is read from the ptui scene file itself. Meshes come from ptui: `cargo xtask
+export-meshes` writes each `[[mesh]]` as ptui places it (triangles, winding and shading normals),
+so Mitsuba sees the same triangles and interpolates the same per-corner normals. What is matched,
+and checked on the loaded Mitsuba scene before rendering (see docs/REFERENCES.md):
+
+- quads: two triangles with ptui's vertex order, face normal edge1 x edge2 (an emissive quad's
+  one-sided `area` emitter shines that way; its BSDF is black, as ptui's emitters do not reflect);
+- diffuse: ptui's diffuse reflects on both faces, so Mitsuba's one-sided `diffuse` is wrapped in
+  `twosided`; mirror: `conductor` with material "none" (reflectance 1) times the colour; glass:
+  `dielectric` with ptui's ior inside and exactly 1.0 outside (Mitsuba's default outside is air,
+  1.000277), both lobes times the colour, radiance scaled by 1/eta^2 on refraction as in ptui;
+- `background`: a `constant` emitter (ptui's constant sky: seen by camera rays and lighting the
+  scene; ptui finds it by BSDF sampling only, Mitsuba also by emitter sampling: same expectation);
+- camera: `perspective`, fov_axis "y" with ptui's vertical fov, row 0 = top, world forward x up
+  to the image's right; box pixel filter; `path` with max_depth -1, emitters visible.
+
+Without --passes the script writes a reference: the mean of independent passes and its noise
+estimate (`.txt` beside the EXR, `noise_rmse = ...`). With --time-spp it instead renders once at
+that spp and prints the render's wall time and, with --reference, its RMSE (equal-time runs).
+"""
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+
+import numpy as np
+
+CAMERA_KEYS = {"position", "look_at", "up", "vfov", "near", "direction"}
+MATERIAL_KEYS = {"color", "emission", "material", "ior", "name"}
+QUAD_KEYS = MATERIAL_KEYS | {"corner", "edge1", "edge2"}
+SPHERE_KEYS = MATERIAL_KEYS | {"center", "radius"}
+MESH_KEYS = MATERIAL_KEYS | {"path", "torus_knot", "smooth", "scale", "rotate", "translate"}
+TOP_KEYS = {"camera", "render", "quad", "sphere", "mesh", "background", "accel", "check"}
+# ptui's defaults (src/scene/load.rs): DEFAULT_COLOR, DEFAULT_IOR.
+DEFAULT_COLOR = 0.75
+DEFAULT_IOR = 1.5
+
+
+class SceneFileError(Exception):
+    pass
+
+
+def fail(path, field, problem):
+    raise SceneFileError(f"{path}: {field}: {problem}")
+
+
+def vec3(path, field, value):
+    if (
+        not isinstance(value, list)
+        or len(value) != 3
+        or not all(isinstance(v, (int, float)) for v in value)
+    ):
+        fail(path, field, f"expected three numbers, got {value!r}")
+    return np.array(value, dtype=np.float64)
+
+
+def rgb(path, field, value):
+    if isinstance(value, (int, float)):
+        value = [value] * 3
+    v = vec3(path, field, value)
+    if (v < 0).any():
+        fail(path, field, f"negative value {value!r}")
+    return v
+
+
+def material(path, where, d, emissive_allowed):
+    """ptui's material fields of one object, with ptui's defaults."""
+    emission = rgb(path, f"{where}.emission", d.get("emission", 0))
+    if emission.max() > 0 and not emissive_allowed:
+        fail(path, f"{where}.emission", "only quads may emit in this harness")
+    kind = d.get("material", "diffuse")
+    if kind not in ("diffuse", "mirror", "glass"):
+        fail(path, f"{where}.material", f"{kind!r} is not diffuse, mirror or glass")
+    if emission.max() > 0 and kind != "diffuse":
+        fail(path, f"{where}.material", "an emitter must be diffuse")
+    # ptui: emitters do not reflect unless given a colour; others default to grey 0.75.
+    default_color = 0.0 if emission.max() > 0 else DEFAULT_COLOR
+    color = rgb(path, f"{where}.color", d.get("color", default_color))
+    if (color > 1).any():
+        fail(path, f"{where}.color", "reflectance above 1")
+    if "ior" in d and kind != "glass":
+        fail(path, f"{where}.ior", "only glass has an ior")
+    return {
+        "kind": kind,
+        "color": color,
+        "emission": emission,
+        "ior": float(d.get("ior", DEFAULT_IOR)),
+    }
+
+
+def read_scene(path):
+    """The camera, background, quads, spheres and meshes of a ptui scene file, checked for what
+    this harness supports."""
+    try:
+        with open(path, "rb") as f:
+            desc = tomllib.load(f)
+    except (OSError, tomllib.TOMLDecodeError) as e:
+        raise SceneFileError(f"{path}: {e}") from e
+    unsupported = set(desc) - TOP_KEYS
+    if unsupported:
+        fail(path, ", ".join(sorted(unsupported)), "not supported by this harness")
+    cam = desc.get("camera")
+    if not isinstance(cam, dict):
+        fail(path, "camera", "missing [camera] table")
+    extra = set(cam) - CAMERA_KEYS
+    if extra:
+        fail(path, "camera", f"unknown keys {sorted(extra)}")
+    if "direction" in cam or cam.get("near", 0) != 0:
+        fail(path, "camera", "only position/look_at/up/vfov with near = 0 are supported")
+    for key in ("position", "look_at", "vfov"):
+        if key not in cam:
+            fail(path, f"camera.{key}", "missing")
+    camera = {
+        "position": vec3(path, "camera.position", cam["position"]),
+        "look_at": vec3(path, "camera.look_at", cam["look_at"]),
+        "up": vec3(path, "camera.up", cam.get("up", [0, 1, 0])),
+        "vfov": float(cam["vfov"]),
+    }
+    if not 0 < camera["vfov"] < 180:
+        fail(path, "camera.vfov", f"{camera['vfov']} is not in (0, 180) degrees")
+    background = rgb(path, "background", desc.get("background", 0))
+
+    def entries(key, keys):
+        for i, d in enumerate(desc.get(key, [])):
+            where = f"{key}[{i}] ({d.get('name', 'unnamed')})"
+            extra = set(d) - keys
+            if extra:
+                fail(path, where, f"unknown keys {sorted(extra)}")
+            yield i, where, d
+
+    quads = []
+    for i, where, q in entries("quad", QUAD_KEYS):
+        for key in ("corner", "edge1", "edge2"):
+            if key not in q:
+                fail(path, f"{where}.{key}", "missing")
+        quads.append(
+            {
+                "name": q.get("name", f"quad {i}"),
+                "corner": vec3(path, f"{where}.corner", q["corner"]),
+                "edge1": vec3(path, f"{where}.edge1", q["edge1"]),
+                "edge2": vec3(path, f"{where}.edge2", q["edge2"]),
+                **material(path, where, q, emissive_allowed=True),
+            }
+        )
+    spheres = []
+    for i, where, s in entries("sphere", SPHERE_KEYS):
+        radius = s.get("radius")
+        if not isinstance(radius, (int, float)) or radius <= 0:
+            fail(path, f"{where}.radius", f"expected a positive number, got {radius!r}")
+        spheres.append(
+            {
+                "name": s.get("name", f"sphere {i}"),
+                "center": vec3(path, f"{where}.center", s.get("center")),
+                "radius": float(radius),
+                **material(path, where, s, emissive_allowed=False),
+            }
+        )
+    meshes = []
+    for i, where, m in entries("mesh", MESH_KEYS):
+        meshes.append(
+            {
+                "name": m.get("name", f"mesh {i}"),
+                "index": i,
+                **material(path, where, m, emissive_allowed=False),
+            }
+        )
+    if not any(q["emission"].max() > 0 for q in quads):
+        fail(path, "quad", "no emissive quad")
+    return camera, background, quads, spheres, meshes
+
+
+def quad_vertices(q):
+    """ptui's parallelogram: corner, corner + edge1, corner + edge1 + edge2, corner + edge2, so the
+    triangles (0, 1, 2), (0, 2, 3) face along edge1 x edge2."""
+    c, e1, e2 = q["corner"], q["edge1"], q["edge2"]
+    return np.array([c, c + e1, c + e1 + e2, c + e2])
+
+
+def write_quad_ply(path, vertices):
+    """An ASCII PLY of one quad as two triangles, no normals (Mitsuba then uses face normals)."""
+    with open(path, "w") as f:
+        f.write("ply\nformat ascii 1.0\n")
+        f.write(f"element vertex {len(vertices)}\n")
+        f.write("property float x\nproperty float y\nproperty float z\n")
+        f.write("element face 2\nproperty list uchar int vertex_indices\nend_header\n")
+        for p in vertices:
+            f.write(" ".join(repr(float(x)) for x in p) + "\n")
+        f.write("3 0 1 2\n3 0 2 3\n")
+
+
+def read_ply_normals(path):
+    """The vertex normals of a PLY written by `cargo xtask export-meshes` (None if flat)."""
+    with open(path, "rb") as f:
+        header = b""
+        while not header.endswith(b"end_header\n"):
+            line = f.readline()
+            if not line:
+                raise SystemExit(f"{path}: no end_header")
+            header += line
+        text = header.decode()
+        n = int(text.split("element vertex ")[1].split()[0])
+        if "property float nx" not in text:
+            return None
+        data = np.frombuffer(f.read(n * 24), dtype="<f4").reshape(n, 6)
+    return data[:, 3:].astype(np.float64)
+
+
+def bsdf(m):
+    c = m["color"].tolist()
+    if m["kind"] == "diffuse":
+        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": c}}}
+    if m["kind"] == "mirror":
+        return {
+            "type": "conductor",
+            "material": "none",
+            "specular_reflectance": {"type": "rgb", "value": c},
+        }
+    return {
+        "type": "dielectric",
+        "int_ior": m["ior"],
+        "ext_ior": 1.0,
+        "specular_reflectance": {"type": "rgb", "value": c},
+        "specular_transmittance": {"type": "rgb", "value": c},
+    }
+
+
+def export_meshes(scene_path, workdir, root):
+    """Each [[mesh]] as ptui places it, by ptui's own code (cargo xtask export-meshes)."""
+    if os.environ.get("PTUI_XTASK"):
+        cmd = [os.environ["PTUI_XTASK"]]
+    else:
+        cmd = ["cargo", "xtask"]
+    subprocess.run(cmd + ["export-meshes", scene_path, workdir], check=True, cwd=root)
+
+
+def build_scene(mi, camera, background, quads, spheres, meshes, width, height, workdir):
+    T = mi.ScalarTransform4f
+    scene = {
+        "type": "scene",
+        "integrator": {
+            "type": "path",
+            "max_depth": -1,  # unbounded; Russian roulette from depth 5 (Mitsuba's default)
+            "hide_emitters": False,
+        },
+        "sensor": {
+            "type": "perspective",
+            "id": "camera",
+            "fov": camera["vfov"],
+            "fov_axis": "y",
+            "near_clip": 1e-3,
+            "far_clip": 1e6,
+            "to_world": T().look_at(
+                origin=camera["position"].tolist(),
+                target=camera["look_at"].tolist(),
+                up=camera["up"].tolist(),
+            ),
+            "sampler": {"type": "independent"},
+            "film": {
+                "type": "hdrfilm",
+                "width": width,
+                "height": height,
+                "pixel_format": "rgb",
+                "component_format": "float32",
+                "rfilter": {"type": "box"},
+            },
+        },
+    }
+    if background.max() > 0:
+        scene["sky"] = {"type": "constant", "radiance": {"type": "rgb", "value": background.tolist()}}
+    for i, q in enumerate(quads):
+        ply = os.path.join(workdir, f"quad{i}.ply")
+        write_quad_ply(ply, quad_vertices(q))
+        shape = {"type": "ply", "filename": ply, "face_normals": True, "bsdf": bsdf(q)}
+        if q["emission"].max() > 0:
+            shape["emitter"] = {
+                "type": "area",
+                "radiance": {"type": "rgb", "value": q["emission"].tolist()},
+            }
+        scene[f"quad{i}"] = shape
+    for i, s in enumerate(spheres):
+        scene[f"sphere{i}"] = {
+            "type": "sphere",
+            "center": s["center"].tolist(),
+            "radius": s["radius"],
+            "bsdf": bsdf(s),
+        }
+    for m in meshes:
+        ply = os.path.join(workdir, f"mesh{m['index']}.ply")
+        normals = read_ply_normals(ply)
+        m["ply_normals"] = normals
+        scene[f"mesh{m['index']}"] = {
+            "type": "ply",
+            "filename": ply,
+            # Smooth: interpolate the exported per-corner normals, as ptui does.
+            "face_normals": normals is None,
+            "bsdf": bsdf(m),
+        }
+    return scene
+
+
+def check_conventions(mi, scene, camera, background, quads, spheres, meshes):
+    """Fail loudly if Mitsuba would not render what ptui does."""
+    shapes = {s.id(): s for s in scene.shapes()}
+    # Lights: face normal edge1 x edge2, radiance the scene's along it.
+    for i, q in enumerate(quads):
+        if q["emission"].max() <= 0:
+            continue
+        shape = shapes[f"quad{i}"]
+        params = mi.traverse(shape)
+        pos = np.array(params["vertex_positions"], dtype=np.float64).reshape(-1, 3)
+        faces = np.array(params["faces"]).reshape(-1, 3)
+        want = np.cross(q["edge1"], q["edge2"])
+        want /= np.linalg.norm(want)
+        for f in faces:
+            n = np.cross(pos[f[1]] - pos[f[0]], pos[f[2]] - pos[f[0]])
+            n /= np.linalg.norm(n)
+            if n.dot(want) < 1 - 1e-6:
+                raise SystemExit(f"light {q['name']}: Mitsuba face normal {n} is not {want}")
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(0, 0, 1)
+        got = np.array(shape.emitter().eval(si), dtype=np.float64).ravel()
+        if not np.allclose(got, q["emission"], rtol=1e-6):
+            raise SystemExit(f"light {q['name']}: Mitsuba emits {got}, not {q['emission']}")
+        print(f"light {q['name']}: one-sided, normal {want}, radiance {got}")
+    # The constant sky: the same radiance from every direction.
+    emitters = [e for e in scene.emitters() if e.is_environment()]
+    if background.max() > 0:
+        if len(emitters) != 1:
+            raise SystemExit(f"expected one constant emitter, found {len(emitters)}")
+        si = mi.SurfaceInteraction3f()
+        for d in ([0, 0, 1], [0, -1, 0], [0.6, 0.8, 0]):
+            si.wi = mi.Vector3f(*d)
+            got = np.array(emitters[0].eval(si), dtype=np.float64).ravel()
+            if not np.allclose(got, background, rtol=1e-6):
+                raise SystemExit(f"constant sky gives {got}, not {background}")
+        print(f"background: constant {background}")
+    elif emitters:
+        raise SystemExit("an environment emitter in a scene without background")
+    # Materials, each checked at normal incidence from the outside (local +z).
+    ctx = mi.BSDFContext()
+    si = mi.SurfaceInteraction3f()
+    si.wi = mi.Vector3f(0, 0, 1)
+    si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+    for obj in quads + spheres + meshes:
+        kind = obj["kind"]
+        sid = (
+            f"quad{quads.index(obj)}"
+            if obj in quads
+            else f"sphere{spheres.index(obj)}"
+            if obj in spheres
+            else f"mesh{obj['index']}"
+        )
+        b = shapes[sid].bsdf()
+        c = obj["color"]
+        if kind == "diffuse":
+            # Both faces reflect: wi and wo below the surface as well as above.
+            for z in (1, -1):
+                si.wi = mi.Vector3f(0, 0, z)
+                got = np.array(b.eval(ctx, si, mi.Vector3f(0, 0, z)), dtype=np.float64).ravel()
+                if not np.allclose(got, c / math.pi, rtol=1e-5, atol=1e-7):
+                    raise SystemExit(f"{obj['name']}: diffuse f cos {got} on side {z}, not {c / math.pi}")
+            si.wi = mi.Vector3f(0, 0, 1)
+        elif kind == "mirror":
+            bs, w = b.sample(ctx, si, 0.5, mi.Point2f(0.5, 0.5))
+            w = np.array(w, dtype=np.float64).ravel()
+            if not np.allclose(w, c, rtol=1e-5):
+                raise SystemExit(f"{obj['name']}: mirror weight {w}, not {c}")
+        else:
+            ior = obj["ior"]
+            r = ((ior - 1) / (ior + 1)) ** 2
+            bs, w = b.sample(ctx, si, 0.5 * r, mi.Point2f(0.5, 0.5))
+            w = np.array(w, dtype=np.float64).ravel()
+            pdf = float(np.array(bs.pdf).ravel()[0])
+            if not (np.allclose(w, c, rtol=1e-5) and abs(pdf - r) < 1e-5):
+                raise SystemExit(f"{obj['name']}: glass reflection weight {w}, pdf {bs.pdf}; wanted {c}, {r}")
+            bs, w = b.sample(ctx, si, 0.5 + 0.5 * r, mi.Point2f(0.5, 0.5))
+            w = np.array(w, dtype=np.float64).ravel()
+            eta = float(np.array(bs.eta).ravel()[0])
+            if abs(eta - ior) > 1e-6 or not np.allclose(w, c / ior**2, rtol=1e-5):
+                raise SystemExit(f"{obj['name']}: glass refraction eta {eta}, weight {w}; wanted {ior}, {c / ior**2}")
+        print(f"{obj['name']}: {kind} {c}" + (f", ior {obj['ior']} in 1.0" if kind == "glass" else ""))
+    # Meshes: Mitsuba holds the exported normals (smooth) or none (flat).
+    for m in meshes:
+        params = mi.traverse(shapes[f"mesh{m['index']}"])
+        has = "vertex_normals" in params.keys() and len(np.array(params["vertex_normals"])) > 0
+        want = m["ply_normals"]
+        if (want is not None) != has:
+            raise SystemExit(f"{m['name']}: Mitsuba vertex normals {has}, ptui's {want is not None}")
+        if want is not None:
+            got = np.array(params["vertex_normals"], dtype=np.float64).reshape(-1, 3)
+            dev = np.abs(got - want).max()
+            if dev > 1e-5:
+                raise SystemExit(f"{m['name']}: Mitsuba's vertex normals differ from ptui's by {dev}")
+        n = len(np.array(params["faces"])) // 3
+        print(f"{m['name']}: {n} triangles, {'ptui normals interpolated' if has else 'face normals'}")
+    # rgb values come back as they are (linear, not upsampled or converted).
+    for value in ([0.8, 0.45, 0.2], [0.05, 0.06, 0.08]):
+        tex = mi.load_dict({"type": "rgb", "value": value})
+        got = np.array(tex.eval(mi.SurfaceInteraction3f()), dtype=np.float64).ravel()
+        if not np.allclose(got, value, rtol=1e-6):
+            raise SystemExit(f"Mitsuba's rgb texture turns {value} into {got}")
+    # Camera: the film's top row looks above the view axis, its right column to forward x up.
+    sensor = scene.sensors()[0]
+    fwd = camera["look_at"] - camera["position"]
+    fwd /= np.linalg.norm(fwd)
+    right = np.cross(fwd, camera["up"])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, fwd)
+    for pos, axis, what in (((0.5, 0.05), up, "top"), ((0.95, 0.5), right, "right")):
+        ray, _ = sensor.sample_ray(0.0, 0.5, mi.Point2f(*pos), mi.Point2f(0.5, 0.5))
+        d = np.array(ray.d, dtype=np.float64).ravel()
+        if d.dot(axis) <= 0:
+            raise SystemExit(f"camera: the film's {what} looks along {d}, not towards {axis}")
+    # Vertical fov: the top edge's ray makes vfov/2 with the view axis.
+    ray, _ = sensor.sample_ray(0.0, 0.5, mi.Point2f(0.5, 0.0), mi.Point2f(0.5, 0.5))
+    d = np.array(ray.d, dtype=np.float64).ravel()
+    half = math.degrees(math.acos(min(1.0, d.dot(fwd) / np.linalg.norm(d))))
+    if abs(2 * half - camera["vfov"]) > 1e-3:
+        raise SystemExit(f"camera: vertical fov {2 * half}, not {camera['vfov']}")
+    print(f"camera: row 0 on top, forward x up to the right, vertical fov {2 * half:.4f}")
+
+
+def atomic_write_text(path, text):
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path) or ".", suffix=".tmp")
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    os.chmod(tmp, 0o644)  # mkstemp makes it private
+    os.replace(tmp, path)
+
+
+def render(mi, scene, seed, spp):
+    img = np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64)[:, :, :3]
+    if not np.isfinite(img).all():
+        sys.exit(f"seed {seed}: non-finite pixels")
+    return img
+
+
+def read_exr(mi, path):
+    return np.array(mi.Bitmap(path), dtype=np.float64)[:, :, :3]
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    root = os.path.dirname(here)
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("scene", help="ptui scene file (e.g. scenes/torus-knot.toml)")
+    ap.add_argument("--out", help="reference EXR (default tests/refs/<scene stem>.exr)")
+    ap.add_argument("--width", type=int, default=160)
+    ap.add_argument("--height", type=int, default=120)
+    ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each pass")
+    ap.add_argument("--passes", type=int, default=16, help="independent passes (seeds)")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the first pass")
+    ap.add_argument("--variant", default="llvm_ad_rgb", choices=["scalar_rgb", "llvm_ad_rgb"])
+    ap.add_argument("--threads", type=int, default=0, help="render threads (0: all cores)")
+    ap.add_argument(
+        "--time-spp",
+        type=int,
+        help="equal-time mode: render once at this spp (after a warm-up render that compiles "
+        "the kernels) and print its seconds and, with --reference, its RMSE",
+    )
+    ap.add_argument("--reference", help="reference EXR for --time-spp")
+    ap.add_argument("--runs", type=int, default=1, help="--time-spp renders, distinct seeds")
+    args = ap.parse_args()
+    if args.passes < 2 or args.spp < 1 or args.width < 1 or args.height < 1:
+        ap.error("need --passes >= 2 and positive --spp, --width, --height")
+    scene_path = os.path.abspath(args.scene)
+    out = args.out or os.path.join(
+        root, "tests", "refs", os.path.splitext(os.path.basename(scene_path))[0] + ".exr"
+    )
+
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant(args.variant)
+    if args.threads:
+        dr.set_thread_count(args.threads)
+    try:
+        camera, background, quads, spheres, meshes = read_scene(scene_path)
+    except SceneFileError as e:
+        sys.exit(str(e))
+
+    with tempfile.TemporaryDirectory() as workdir:
+        if meshes:
+            export_meshes(scene_path, workdir, root)
+        t_load = time.time()
+        desc = build_scene(mi, camera, background, quads, spheres, meshes, args.width, args.height, workdir)
+        scene = mi.load_dict(desc)
+        load_seconds = time.time() - t_load
+        check_conventions(mi, scene, camera, background, quads, spheres, meshes)
+
+        if args.time_spp:
+            # The first render of a scene compiles its kernels (LLVM); time the later ones,
+            # as a user rendering for a while would see.
+            t0 = time.time()
+            render(mi, scene, 10_000, 1)
+            print(f"scene load {load_seconds:.2f} s, warm-up (kernel compile) {time.time() - t0:.2f} s")
+            ref = read_exr(mi, args.reference) if args.reference else None
+            for k in range(args.runs):
+                t0 = time.time()
+                img = render(mi, scene, args.seed + k, args.time_spp)
+                seconds = time.time() - t0
+                line = f"mitsuba {args.variant} spp {args.time_spp} seconds {seconds:.3f}"
+                if ref is not None:
+                    line += f" rmse {math.sqrt(((img - ref) ** 2).mean()):.6f}"
+                print(line, flush=True)
+            return
+
+        h, w = args.height, args.width
+        total = np.zeros((h, w, 3))
+        total2 = np.zeros((h, w, 3))
+        t0 = time.time()
+        for k in range(args.passes):
+            img = render(mi, scene, args.seed + k, args.spp)
+            total += img
+            total2 += img * img
+            print(
+                f"pass {k + 1}/{args.passes}: means {img.reshape(-1, 3).mean(0)} "
+                f"({time.time() - t0:.0f} s)",
+                flush=True,
+            )
+        seconds = time.time() - t0
+
+    n = args.passes
+    mean = total / n
+    # Unbiased variance of one pass across passes; the mean's is that over n.
+    var_pass = np.maximum(total2 - n * mean * mean, 0) / (n - 1)
+    se = np.sqrt(var_pass / n)
+    noise_rmse = math.sqrt((se**2).mean())
+    ch_mean = mean.reshape(-1, 3).mean(0)
+    ch_se = np.sqrt(var_pass.reshape(-1, 3).sum(0)) / (h * w) / math.sqrt(n)
+
+    os.makedirs(os.path.dirname(out) or ".", exist_ok=True)
+    bmp = mi.Bitmap(mean.astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB)
+    tmp = out + ".tmp.exr"
+    bmp.write(tmp)
+    os.replace(tmp, out)
+    stats = (
+        f"# {os.path.basename(out)}: written by harness/mitsuba_mesh.py; do not edit\n"
+        f"scene = {os.path.relpath(scene_path, root)}\n"
+        f"renderer = Mitsuba {mi.__version__}, {args.variant}, path, max_depth -1, box filter\n"
+        f"size = {w}x{h}\n"
+        f"spp = {args.spp * n} ({n} independent passes of {args.spp}, seeds {args.seed}..{args.seed + n - 1})\n"
+        f"seconds = {seconds:.0f} ({os.cpu_count()} cores)\n"
+        f"mean = {ch_mean[0]:.6f} {ch_mean[1]:.6f} {ch_mean[2]:.6f}\n"
+        f"mean_standard_error = {ch_se[0]:.7f} {ch_se[1]:.7f} {ch_se[2]:.7f}\n"
+        f"noise_rmse = {noise_rmse:.6f}\n"
+    )
+    atomic_write_text(os.path.splitext(out)[0] + ".txt", stats)
+    print(stats, end="")
+
+
+if __name__ == "__main__":
+    main()
