@@ -45,12 +45,8 @@ pub fn run(scene_path: &Path, dir: &Path) -> anyhow::Result<()> {
             scene::load_str_with(&text, &what, &options).map_err(|e| anyhow::anyhow!("{e}"))?;
         let out = dir.join(format!("mesh{i}.ply"));
         let (tris, smooth) = write_ply(&built, &out)?;
-        println!(
-            "{}: {tris} triangles, {} -> {}",
-            what,
-            if smooth { "vertex normals" } else { "flat" },
-            out.display()
-        );
+        let normals = if smooth { "vertex normals" } else { "flat" };
+        println!("{what}: {tris} triangles, {normals} -> {}", out.display());
     }
     Ok(())
 }
