@@ -112,3 +112,55 @@ fn write_ply(scene: &scene::Scene, out: &Path) -> anyhow::Result<(usize, bool)> 
     w.flush()?;
     Ok((tris.len(), smooth))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The header's `element NAME COUNT` and whether vertex normals are declared.
+    fn header(path: &Path) -> (usize, usize, bool) {
+        let bytes = std::fs::read(path).unwrap();
+        let end = bytes
+            .windows(11)
+            .position(|w| w == b"end_header\n")
+            .unwrap();
+        let text = std::str::from_utf8(&bytes[..end]).unwrap();
+        let count = |what: &str| -> usize {
+            text.lines()
+                .find_map(|l| l.strip_prefix(what))
+                .unwrap()
+                .trim()
+                .parse()
+                .unwrap()
+        };
+        let normals = text.contains("property float nx");
+        let (v, f) = (count("element vertex "), count("element face "));
+        let stride = if normals { 24 } else { 12 };
+        // The body is exactly the vertices and the faces (1 count byte + 3 indices each).
+        assert_eq!(bytes.len() - end - 11, v * stride + f * 13);
+        (v, f, normals)
+    }
+
+    /// Each `[[mesh]]` becomes its own file, three vertices per triangle, with normals exactly
+    /// when ptui shades it smooth; the other objects of the scene are left out.
+    #[test]
+    fn exports_each_mesh_with_its_normals() {
+        let dir = std::env::temp_dir().join(format!("ptui-export-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = dir.join("scene.toml");
+        std::fs::write(
+            &scene,
+            "[[quad]]\ncorner = [0, 0, 0]\nedge1 = [1, 0, 0]\nedge2 = [0, 0, 1]\nemission = 1\n\
+             [[mesh]]\ntorus_knot = { p = 2, q = 3, segments = 16, sides = 4, tube = 0.3 }\n\
+             [[mesh]]\ntorus_knot = { p = 2, q = 3, segments = 16, sides = 4, tube = 0.3 }\n\
+             smooth = false\nscale = 2\n",
+        )
+        .unwrap();
+        run(&scene, &dir).unwrap();
+        let smooth = header(&dir.join("mesh0.ply"));
+        let flat = header(&dir.join("mesh1.ply"));
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(smooth, (3 * 128, 128, true));
+        assert_eq!(flat, (3 * 128, 128, false));
+    }
+}
