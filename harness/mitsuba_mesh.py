@@ -34,6 +34,7 @@ import time
 import tomllib
 
 import numpy as np
+from mitsuba_passes import Passes
 
 CAMERA_KEYS = {"position", "look_at", "up", "vfov", "near", "direction"}
 MATERIAL_KEYS = {"color", "emission", "material", "ior", "name"}
@@ -428,14 +429,6 @@ def check_conventions(mi, scene, camera, background, quads, spheres, meshes):
     print(f"camera: row 0 on top, forward x up to the right, vertical fov {2 * half:.4f}")
 
 
-def atomic_write_text(path, text):
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path) or ".", suffix=".tmp")
-    with os.fdopen(fd, "w") as f:
-        f.write(text)
-    os.chmod(tmp, 0o644)  # mkstemp makes it private
-    os.replace(tmp, path)
-
-
 def render(mi, scene, seed, spp):
     img = np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64)[:, :, :3]
     if not np.isfinite(img).all():
@@ -513,49 +506,17 @@ def main():
                 print(line, flush=True)
             return
 
-        h, w = args.height, args.width
-        total = np.zeros((h, w, 3))
-        total2 = np.zeros((h, w, 3))
-        t0 = time.time()
-        for k in range(args.passes):
-            img = render(mi, scene, args.seed + k, args.spp)
-            total += img
-            total2 += img * img
-            print(
-                f"pass {k + 1}/{args.passes}: means {img.reshape(-1, 3).mean(0)} "
-                f"({time.time() - t0:.0f} s)",
-                flush=True,
-            )
-        seconds = time.time() - t0
-
-    n = args.passes
-    mean = total / n
-    # Unbiased variance of one pass across passes; the mean's is that over n.
-    var_pass = np.maximum(total2 - n * mean * mean, 0) / (n - 1)
-    se = np.sqrt(var_pass / n)
-    noise_rmse = math.sqrt((se**2).mean())
-    ch_mean = mean.reshape(-1, 3).mean(0)
-    ch_se = np.sqrt(var_pass.reshape(-1, 3).sum(0)) / (h * w) / math.sqrt(n)
-
-    os.makedirs(os.path.dirname(out) or ".", exist_ok=True)
-    bmp = mi.Bitmap(mean.astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB)
-    tmp = out + ".tmp.exr"
-    bmp.write(tmp)
-    os.replace(tmp, out)
-    stats = (
-        f"# {os.path.basename(out)}: written by harness/mitsuba_mesh.py; do not edit\n"
-        f"scene = {os.path.relpath(scene_path, root)}\n"
-        f"renderer = Mitsuba {mi.__version__}, {args.variant}, path, max_depth -1, box filter\n"
-        f"size = {w}x{h}\n"
-        f"spp = {args.spp * n} ({n} independent passes of {args.spp}, seeds {args.seed}..{args.seed + n - 1})\n"
-        f"seconds = {seconds:.0f} ({os.cpu_count()} cores)\n"
-        f"mean = {ch_mean[0]:.6f} {ch_mean[1]:.6f} {ch_mean[2]:.6f}\n"
-        f"mean_standard_error = {ch_se[0]:.7f} {ch_se[1]:.7f} {ch_se[2]:.7f}\n"
-        f"noise_rmse = {noise_rmse:.6f}\n"
+        passes = Passes(mi, scene, args.spp, args.passes, args.seed)
+    passes.write(
+        mi,
+        out,
+        root,
+        __file__,
+        [
+            f"scene = {os.path.relpath(scene_path, root)}",
+            f"renderer = Mitsuba {mi.__version__}, {args.variant}, path, max_depth -1, box filter",
+        ],
     )
-    atomic_write_text(os.path.splitext(out)[0] + ".txt", stats)
-    print(stats, end="")
-
 
 if __name__ == "__main__":
     main()
