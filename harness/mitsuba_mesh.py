@@ -34,6 +34,7 @@ import time
 import tomllib
 
 import numpy as np
+from mitsuba_cornell_mesh import SceneFileError, fail, quad_vertices, rgb, vec3, write_ply
 from mitsuba_passes import Passes
 
 CAMERA_KEYS = {"position", "look_at", "up", "vfov", "near", "direction"}
@@ -45,33 +46,6 @@ TOP_KEYS = {"camera", "render", "quad", "sphere", "mesh", "background", "accel",
 # ptui's defaults (src/scene/load.rs): DEFAULT_COLOR, DEFAULT_IOR.
 DEFAULT_COLOR = 0.75
 DEFAULT_IOR = 1.5
-
-
-class SceneFileError(Exception):
-    pass
-
-
-def fail(path, field, problem):
-    raise SceneFileError(f"{path}: {field}: {problem}")
-
-
-def vec3(path, field, value):
-    if (
-        not isinstance(value, list)
-        or len(value) != 3
-        or not all(isinstance(v, (int, float)) for v in value)
-    ):
-        fail(path, field, f"expected three numbers, got {value!r}")
-    return np.array(value, dtype=np.float64)
-
-
-def rgb(path, field, value):
-    if isinstance(value, (int, float)):
-        value = [value] * 3
-    v = vec3(path, field, value)
-    if (v < 0).any():
-        fail(path, field, f"negative value {value!r}")
-    return v
 
 
 def material(path, where, d, emissive_allowed):
@@ -180,25 +154,6 @@ def read_scene(path):
     return camera, background, quads, spheres, meshes
 
 
-def quad_vertices(q):
-    """ptui's parallelogram: corner, corner + edge1, corner + edge1 + edge2, corner + edge2, so the
-    triangles (0, 1, 2), (0, 2, 3) face along edge1 x edge2."""
-    c, e1, e2 = q["corner"], q["edge1"], q["edge2"]
-    return np.array([c, c + e1, c + e1 + e2, c + e2])
-
-
-def write_quad_ply(path, vertices):
-    """An ASCII PLY of one quad as two triangles, no normals (Mitsuba then uses face normals)."""
-    with open(path, "w") as f:
-        f.write("ply\nformat ascii 1.0\n")
-        f.write(f"element vertex {len(vertices)}\n")
-        f.write("property float x\nproperty float y\nproperty float z\n")
-        f.write("element face 2\nproperty list uchar int vertex_indices\nend_header\n")
-        for p in vertices:
-            f.write(" ".join(repr(float(x)) for x in p) + "\n")
-        f.write("3 0 1 2\n3 0 2 3\n")
-
-
 def read_ply_normals(path):
     """The vertex normals of a PLY written by `cargo xtask export-meshes` (None if flat)."""
     with open(path, "rb") as f:
@@ -280,7 +235,7 @@ def build_scene(mi, camera, background, quads, spheres, meshes, width, height, w
         scene["sky"] = {"type": "constant", "radiance": {"type": "rgb", "value": background.tolist()}}
     for i, q in enumerate(quads):
         ply = os.path.join(workdir, f"quad{i}.ply")
-        write_quad_ply(ply, quad_vertices(q))
+        write_ply(ply, quad_vertices(q))
         shape = {"type": "ply", "filename": ply, "face_normals": True, "bsdf": bsdf(q)}
         if q["emission"].max() > 0:
             shape["emitter"] = {
