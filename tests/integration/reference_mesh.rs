@@ -47,10 +47,10 @@ fn assert_converges_to_mitsuba(scene: Scene, name: &str) {
 }
 
 /// The torus knot against `tests/refs/torus-knot.exr`: Mitsuba renders ptui's own triangles and
-/// per-corner normals (exported by `cargo xtask export-meshes`), so this holds ptui's shading
-/// normals, its mirror and glass spheres and its constant background to Mitsuba's. Seen to fail
-/// with the knot shaded flat (`smooth = false`) and with the light 1% too bright
-/// (docs/REFERENCES.md).
+/// per-corner normals (exported by `cargo xtask export-meshes`), so this holds a 131k-triangle
+/// BVH scene, its mirror and glass spheres and its constant background to Mitsuba's. Seen to fail
+/// with the light 1% too bright; a knot shaded flat passes, its facets being smaller than a
+/// pixel at this size (shading normals are held by the spot test; docs/REFERENCES.md).
 #[test]
 fn torus_knot_is_unbiased_against_mitsuba() {
     let scene = scene::load("torus-knot").expect("built-in");
