@@ -6,6 +6,7 @@ use ptui::analysis::stats::bonferroni_z;
 use ptui::analysis::{convergence, reference, stats};
 use ptui::render::film::Film;
 use ptui::render::Renderer;
+use ptui::sampling::SamplerKind;
 use ptui::scene::{self, Scene};
 use ptui::settings::{RenderSettings, SettingsOverrides};
 use std::path::{Path, PathBuf};
@@ -185,4 +186,36 @@ pub fn assert_converges_to(
             tolerance * 100.0
         );
     }
+}
+
+/// Holds `scene`, rendered at the size of `tests/refs/<name>.exr` with its own settings but for
+/// 1024 passes of one independent sample per pixel (passes are then samples, as the 1/sqrt(spp)
+/// law needs), to that Mitsuba reference with its noise RMSE and channel means' standard errors
+/// (`<name>.txt`), by [`assert_converges_to`]; returns the render, the reference and its noise.
+pub fn assert_converges_to_mitsuba(
+    scene: Scene,
+    name: &str,
+) -> (Renderer, reference::LinearImage, f64) {
+    let refs = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/refs");
+    let reference =
+        reference::load(&refs.join(format!("{name}.exr"))).unwrap_or_else(|e| panic!("{e}"));
+    let summary = refs.join(format!("{name}.txt"));
+    let ref_noise = summary_value(&summary, "noise_rmse")[0];
+    let ref_mean_se = summary_value(&summary, "mean_standard_error");
+    let ref_mean_se = [ref_mean_se[0], ref_mean_se[1], ref_mean_se[2]];
+    let scene = Arc::new(scene);
+    let settings = RenderSettings::merged(&[
+        &scene.render,
+        &SettingsOverrides {
+            width: Some(reference.width),
+            height: Some(reference.height),
+            spp: Some(1024),
+            sampler: Some(SamplerKind::Independent),
+            adaptive: Some(false),
+            ..Default::default()
+        },
+    ]);
+    let mut r = Renderer::new(scene, settings).expect("settings");
+    assert_converges_to(&mut r, &reference, ref_noise, ref_mean_se);
+    (r, reference, ref_noise)
 }

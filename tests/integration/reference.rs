@@ -10,7 +10,6 @@ use ptui::render::Renderer;
 use ptui::sampling::SamplerKind;
 use ptui::scene;
 use ptui::settings::{RenderSettings, SettingsOverrides};
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
@@ -55,7 +54,10 @@ fn cornell_is_unbiased_against_the_reference() {
 /// two-sided ones the light's back also lights the ceiling through the 0.1 mm gap above it.
 #[test]
 fn cornell_mesh_is_unbiased_against_mitsuba() {
-    assert_default_render_converges_to_mitsuba("cornell-mesh");
+    common::assert_converges_to_mitsuba(
+        scene::load("cornell-mesh").expect("built-in"),
+        "cornell-mesh",
+    );
 }
 
 /// The `sky` scene (spheres on a ground, lit only by the built-in sky map: a gradient and a sun
@@ -71,7 +73,8 @@ fn cornell_mesh_is_unbiased_against_mitsuba() {
 /// direction and size) and the ground in front.
 #[test]
 fn sky_is_unbiased_against_mitsuba() {
-    let (r, reference, ref_noise) = assert_default_render_converges_to_mitsuba("sky");
+    let (r, reference, ref_noise) =
+        common::assert_converges_to_mitsuba(scene::load("sky").expect("built-in"), "sky");
     let film = r.film();
     let var: Vec<f64> = (0..film.pixels())
         .flat_map(|i| film.variance_of_mean(i).to_array())
@@ -86,36 +89,6 @@ fn sky_is_unbiased_against_mitsuba() {
         ("ground in front", 0, 100, 160, 120),
     ];
     assert_regions_match(&img, &var, &reference, ref_noise, &regions, None);
-}
-
-/// Built-in `scene` at its reference's size (`tests/refs/SCENE.exr`, with its noise estimate in
-/// `SCENE.txt`), 1024 passes of independent samples, held to the reference by
-/// [`common::assert_converges_to`]; returns the render, the reference and its noise.
-fn assert_default_render_converges_to_mitsuba(
-    name: &str,
-) -> (Renderer, reference::LinearImage, f64) {
-    let refs = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/refs");
-    let reference =
-        reference::load(&refs.join(format!("{name}.exr"))).unwrap_or_else(|e| panic!("{e}"));
-    let summary = refs.join(format!("{name}.txt"));
-    let ref_noise = common::summary_value(&summary, "noise_rmse")[0];
-    let ref_mean_se = common::summary_value(&summary, "mean_standard_error");
-    let ref_mean_se = [ref_mean_se[0], ref_mean_se[1], ref_mean_se[2]];
-    let scene = Arc::new(scene::load(name).expect("built-in"));
-    let settings = RenderSettings::merged(&[
-        &scene.render,
-        &SettingsOverrides {
-            width: Some(reference.width),
-            height: Some(reference.height),
-            spp: Some(1024),
-            sampler: Some(SamplerKind::Independent),
-            adaptive: Some(false),
-            ..Default::default()
-        },
-    ]);
-    let mut r = Renderer::new(scene, settings).expect("settings");
-    common::assert_converges_to(&mut r, &reference, ref_noise, ref_mean_se);
-    (r, reference, ref_noise)
 }
 
 /// Adaptive sampling (a pixel's sample count fixed from its neighbours' pilot) keeps every pixel

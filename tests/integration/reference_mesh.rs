@@ -7,43 +7,11 @@
 
 use crate::common;
 
-use ptui::analysis::reference;
-use ptui::render::Renderer;
-use ptui::sampling::SamplerKind;
-use ptui::scene::{self, BuildOptions, Scene};
-use ptui::settings::{RenderSettings, SettingsOverrides};
+use ptui::scene::{self, BuildOptions};
 use std::path::PathBuf;
-use std::sync::Arc;
 
 fn manifest() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// Holds `scene`, rendered at the size of `tests/refs/<name>.exr` with its own settings but for
-/// 1024 passes of one independent sample per pixel (passes are then samples, as the 1/sqrt(spp)
-/// law needs), to that reference with its noise RMSE and channel means' standard errors
-/// (`<name>.txt`), by [`common::assert_converges_to`].
-fn assert_converges_to_mitsuba(scene: Scene, name: &str) {
-    let refs = manifest().join("tests/refs");
-    let reference =
-        reference::load(&refs.join(format!("{name}.exr"))).unwrap_or_else(|e| panic!("{e}"));
-    let summary = refs.join(format!("{name}.txt"));
-    let noise = common::summary_value(&summary, "noise_rmse")[0];
-    let se = common::summary_value(&summary, "mean_standard_error");
-    let scene = Arc::new(scene);
-    let settings = RenderSettings::merged(&[
-        &scene.render,
-        &SettingsOverrides {
-            width: Some(reference.width),
-            height: Some(reference.height),
-            spp: Some(1024),
-            sampler: Some(SamplerKind::Independent),
-            adaptive: Some(false),
-            ..Default::default()
-        },
-    ]);
-    let mut r = Renderer::new(scene, settings).expect("settings");
-    common::assert_converges_to(&mut r, &reference, noise, [se[0], se[1], se[2]]);
 }
 
 /// The torus knot against `tests/refs/torus-knot.exr`: Mitsuba renders ptui's own triangles and
@@ -54,7 +22,7 @@ fn assert_converges_to_mitsuba(scene: Scene, name: &str) {
 #[test]
 fn torus_knot_is_unbiased_against_mitsuba() {
     let scene = scene::load("torus-knot").expect("built-in");
-    assert_converges_to_mitsuba(scene, "torus-knot");
+    common::assert_converges_to_mitsuba(scene, "torus-knot");
 }
 
 /// Spot against `tests/refs/spot.exr`: an OBJ read by ptui's reader, normals computed by ptui
@@ -86,5 +54,5 @@ fn spot_is_unbiased_against_mitsuba() {
     };
     let scene =
         scene::load_str_with(&src, "scenes/spot.toml", &options).unwrap_or_else(|e| panic!("{e}"));
-    assert_converges_to_mitsuba(scene, "spot");
+    common::assert_converges_to_mitsuba(scene, "spot");
 }
