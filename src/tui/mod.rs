@@ -17,6 +17,7 @@ pub mod layout;
 pub mod preview;
 pub mod save;
 pub mod term;
+mod text;
 pub mod view;
 
 use crate::session::{Command, SessionHandle};

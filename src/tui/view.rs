@@ -13,6 +13,7 @@
 use super::app::{App, Message};
 use super::form::{Field, Shown};
 use super::layout::{layout, MIN_HEIGHT, MIN_WIDTH};
+use super::text::{clip_left, clip_right, clip_words, fit_parts, fmt_duration, wrap_words};
 use crate::session::{JobStatus, Snapshot};
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style, Stylize};
@@ -111,54 +112,6 @@ fn draw_title(frame: &mut Frame, app: &App, area: Rect) {
     }
 }
 
-/// The spans of `parts` that fit in `width` columns, in order; a part that does not fit whole
-/// is left out (never cut mid-word), and the later, smaller ones still get their chance.
-fn fit_parts(parts: Vec<Span<'_>>, width: usize) -> Line<'_> {
-    let mut used = 0;
-    let mut kept = Vec::new();
-    for p in parts {
-        let w = p.width();
-        if used + w <= width {
-            used += w;
-            kept.push(p);
-        }
-    }
-    Line::from(kept)
-}
-
-/// `s` within `w` columns, cut at a word boundary with an ellipsis if it is longer.
-fn clip_words(s: &str, w: usize) -> String {
-    if s.chars().count() <= w {
-        return s.to_string();
-    }
-    let head: String = s.chars().take(w.saturating_sub(1)).collect();
-    match head.rfind(' ') {
-        Some(i) if i > 0 => format!("{}…", head[..i].trim_end()),
-        _ if w > 0 => format!("{head}…"),
-        _ => String::new(),
-    }
-}
-
-/// Words of `s` in lines of at most `w` columns (a longer word gets a line of its own, cut).
-fn wrap_words(s: &str, w: usize) -> Vec<String> {
-    let mut lines = Vec::new();
-    let mut line = String::new();
-    for word in s.split_whitespace() {
-        let (n, m) = (line.chars().count(), word.chars().count());
-        if n > 0 && n + 1 + m > w {
-            lines.push(std::mem::take(&mut line));
-        }
-        if !line.is_empty() {
-            line.push(' ');
-        }
-        line.push_str(word);
-    }
-    if !line.is_empty() || lines.is_empty() {
-        lines.push(line);
-    }
-    lines.into_iter().map(|l| clip_right(&l, w)).collect()
-}
-
 fn draw_form(frame: &mut Frame, app: &App, area: Rect) {
     let block = Block::new()
         .borders(Borders::RIGHT)
@@ -212,43 +165,6 @@ fn draw_form(frame: &mut Frame, app: &App, area: Rect) {
         })
         .collect();
     frame.render_widget(Paragraph::new(lines), inner);
-}
-
-/// Keep the end of `s` (the part being typed, the file name of a path) within `w` columns.
-fn clip_left(s: &str, w: usize) -> String {
-    let n = s.chars().count();
-    if n <= w {
-        s.to_string()
-    } else if w == 0 {
-        String::new()
-    } else {
-        let tail: String = s.chars().skip(n - (w - 1)).collect();
-        format!("…{tail}")
-    }
-}
-
-/// Keep the start of `s` within `w` columns.
-fn clip_right(s: &str, w: usize) -> String {
-    if s.chars().count() <= w {
-        s.to_string()
-    } else if w == 0 {
-        String::new()
-    } else {
-        let head: String = s.chars().take(w - 1).collect();
-        format!("{head}…")
-    }
-}
-
-pub fn fmt_duration(secs: f64) -> String {
-    if !secs.is_finite() {
-        return "--".into();
-    }
-    let s = secs.round() as u64;
-    if s >= 3600 {
-        format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
-    } else {
-        format!("{}:{:02}", s / 60, s % 60)
-    }
 }
 
 /// With adaptive sampling, the samples per pixel the passes came to on average.
@@ -782,14 +698,6 @@ mod tests {
         let mut app = painterly_app(MIN_WIDTH, MIN_HEIGHT, Field::Sampler);
         app.form.overrides.sampler = Some(crate::sampling::SamplerKind::Independent);
         insta::assert_snapshot!(render(&app).backend());
-    }
-
-    #[test]
-    fn clipping_keeps_the_end_or_the_start() {
-        assert_eq!(clip_left("scenes/room.toml", 8), "…om.toml");
-        assert_eq!(clip_right("independent", 9), "independ…");
-        assert_eq!(clip_right("sobol", 9), "sobol");
-        assert_eq!(clip_right("sobol", 0), "");
     }
 
     #[test]
