@@ -59,16 +59,18 @@ def rgb(path, field, value):
     return v
 
 
-def read_scene(path):
-    """The camera and quads of a ptui scene file, checked for what this harness supports."""
+def load_toml(path):
+    """A scene file's TOML, or a SceneFileError naming the file."""
     try:
         with open(path, "rb") as f:
-            desc = tomllib.load(f)
+            return tomllib.load(f)
     except (OSError, tomllib.TOMLDecodeError) as e:
         raise SceneFileError(f"{path}: {e}") from e
-    unsupported = set(desc) - {"camera", "render", "quad"}
-    if unsupported:
-        fail(path, ", ".join(sorted(unsupported)), "not supported by this harness (quads only)")
+
+
+def read_camera(path, desc):
+    """The [camera] of a scene file's TOML `desc`, checked for what the harnesses support: a
+    pinhole from position, look_at and up with a vertical field of view."""
     cam = desc.get("camera")
     if not isinstance(cam, dict):
         fail(path, "camera", "missing [camera] table")
@@ -88,6 +90,53 @@ def read_scene(path):
     }
     if not 0 < camera["vfov"] < 180:
         fail(path, "camera.vfov", f"{camera['vfov']} is not in (0, 180) degrees")
+    return camera
+
+
+def base_scene(mi, camera, width, height):
+    """A Mitsuba scene of ptui's conventions, without shapes or emitters: the `path` integrator,
+    unbounded, emitters visible; a perspective sensor from `camera` with its vertical field of
+    view (Mitsuba's default axis is x), independent samples, a box filter, linear float RGB."""
+    T = mi.ScalarTransform4f
+    return {
+        "type": "scene",
+        "integrator": {
+            "type": "path",
+            "max_depth": -1,  # unbounded; Russian roulette from depth 5 (Mitsuba's default)
+            "hide_emitters": False,
+        },
+        "sensor": {
+            "type": "perspective",
+            "id": "camera",
+            "fov": camera["vfov"],
+            "fov_axis": "y",
+            "near_clip": 1e-3,
+            "far_clip": 1e6,
+            "to_world": T().look_at(
+                origin=camera["position"].tolist(),
+                target=camera["look_at"].tolist(),
+                up=camera["up"].tolist(),
+            ),
+            "sampler": {"type": "independent"},
+            "film": {
+                "type": "hdrfilm",
+                "width": width,
+                "height": height,
+                "pixel_format": "rgb",
+                "component_format": "float32",
+                "rfilter": {"type": "box"},
+            },
+        },
+    }
+
+
+def read_scene(path):
+    """The camera and quads of a ptui scene file, checked for what this harness supports."""
+    desc = load_toml(path)
+    unsupported = set(desc) - {"camera", "render", "quad"}
+    if unsupported:
+        fail(path, ", ".join(sorted(unsupported)), "not supported by this harness (quads only)")
+    camera = read_camera(path, desc)
     quads = []
     for i, q in enumerate(desc.get("quad", [])):
         where = f"quad[{i}] ({q.get('name', 'unnamed')})"
@@ -145,36 +194,7 @@ def write_ply(path, vertices):
 
 
 def build_scene(mi, camera, quads, width, height, workdir, two_sided):
-    T = mi.ScalarTransform4f
-    scene = {
-        "type": "scene",
-        "integrator": {
-            "type": "path",
-            "max_depth": -1,  # unbounded; Russian roulette from depth 5 (Mitsuba's default)
-            "hide_emitters": False,
-        },
-        "sensor": {
-            "type": "perspective",
-            "fov": camera["vfov"],
-            "fov_axis": "y",
-            "near_clip": 1e-3,
-            "far_clip": 1e6,
-            "to_world": T().look_at(
-                origin=camera["position"].tolist(),
-                target=camera["look_at"].tolist(),
-                up=camera["up"].tolist(),
-            ),
-            "sampler": {"type": "independent"},
-            "film": {
-                "type": "hdrfilm",
-                "width": width,
-                "height": height,
-                "pixel_format": "rgb",
-                "component_format": "float32",
-                "rfilter": {"type": "box"},
-            },
-        },
-    }
+    scene = base_scene(mi, camera, width, height)
     lights = []
     for i, q in enumerate(quads):
         copies = [(False, None)]

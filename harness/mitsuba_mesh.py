@@ -31,13 +31,21 @@ import subprocess
 import sys
 import tempfile
 import time
-import tomllib
 
 import numpy as np
-from mitsuba_cornell_mesh import SceneFileError, fail, quad_vertices, rgb, vec3, write_ply
+from mitsuba_cornell_mesh import (
+    SceneFileError,
+    base_scene,
+    fail,
+    load_toml,
+    quad_vertices,
+    read_camera,
+    rgb,
+    vec3,
+    write_ply,
+)
 from mitsuba_passes import Passes
 
-CAMERA_KEYS = {"position", "look_at", "up", "vfov", "near", "direction"}
 MATERIAL_KEYS = {"color", "emission", "material", "ior", "name"}
 QUAD_KEYS = MATERIAL_KEYS | {"corner", "edge1", "edge2"}
 SPHERE_KEYS = MATERIAL_KEYS | {"center", "radius"}
@@ -76,33 +84,11 @@ def material(path, where, d, emissive_allowed):
 def read_scene(path):
     """The camera, background, quads, spheres and meshes of a ptui scene file, checked for what
     this harness supports."""
-    try:
-        with open(path, "rb") as f:
-            desc = tomllib.load(f)
-    except (OSError, tomllib.TOMLDecodeError) as e:
-        raise SceneFileError(f"{path}: {e}") from e
+    desc = load_toml(path)
     unsupported = set(desc) - TOP_KEYS
     if unsupported:
         fail(path, ", ".join(sorted(unsupported)), "not supported by this harness")
-    cam = desc.get("camera")
-    if not isinstance(cam, dict):
-        fail(path, "camera", "missing [camera] table")
-    extra = set(cam) - CAMERA_KEYS
-    if extra:
-        fail(path, "camera", f"unknown keys {sorted(extra)}")
-    if "direction" in cam or cam.get("near", 0) != 0:
-        fail(path, "camera", "only position/look_at/up/vfov with near = 0 are supported")
-    for key in ("position", "look_at", "vfov"):
-        if key not in cam:
-            fail(path, f"camera.{key}", "missing")
-    camera = {
-        "position": vec3(path, "camera.position", cam["position"]),
-        "look_at": vec3(path, "camera.look_at", cam["look_at"]),
-        "up": vec3(path, "camera.up", cam.get("up", [0, 1, 0])),
-        "vfov": float(cam["vfov"]),
-    }
-    if not 0 < camera["vfov"] < 180:
-        fail(path, "camera.vfov", f"{camera['vfov']} is not in (0, 180) degrees")
+    camera = read_camera(path, desc)
     background = rgb(path, "background", desc.get("background", 0))
 
     def entries(key, keys):
@@ -190,47 +176,20 @@ def bsdf(m):
     }
 
 
+def xtask():
+    """How to run ptui's xtask: $PTUI_XTASK (set by harness/mitsuba_env.sh), else cargo."""
+    if os.environ.get("PTUI_XTASK"):
+        return [os.environ["PTUI_XTASK"]]
+    return ["cargo", "xtask"]
+
+
 def export_meshes(scene_path, workdir, root):
     """Each [[mesh]] as ptui places it, by ptui's own code (cargo xtask export-meshes)."""
-    if os.environ.get("PTUI_XTASK"):
-        cmd = [os.environ["PTUI_XTASK"]]
-    else:
-        cmd = ["cargo", "xtask"]
-    subprocess.run(cmd + ["export-meshes", scene_path, workdir], check=True, cwd=root)
+    subprocess.run(xtask() + ["export-meshes", scene_path, workdir], check=True, cwd=root)
 
 
 def build_scene(mi, camera, background, quads, spheres, meshes, width, height, workdir):
-    T = mi.ScalarTransform4f
-    scene = {
-        "type": "scene",
-        "integrator": {
-            "type": "path",
-            "max_depth": -1,  # unbounded; Russian roulette from depth 5 (Mitsuba's default)
-            "hide_emitters": False,
-        },
-        "sensor": {
-            "type": "perspective",
-            "id": "camera",
-            "fov": camera["vfov"],
-            "fov_axis": "y",
-            "near_clip": 1e-3,
-            "far_clip": 1e6,
-            "to_world": T().look_at(
-                origin=camera["position"].tolist(),
-                target=camera["look_at"].tolist(),
-                up=camera["up"].tolist(),
-            ),
-            "sampler": {"type": "independent"},
-            "film": {
-                "type": "hdrfilm",
-                "width": width,
-                "height": height,
-                "pixel_format": "rgb",
-                "component_format": "float32",
-                "rfilter": {"type": "box"},
-            },
-        },
-    }
+    scene = base_scene(mi, camera, width, height)
     if background.max() > 0:
         scene["sky"] = {"type": "constant", "radiance": {"type": "rgb", "value": background.tolist()}}
     for i, q in enumerate(quads):

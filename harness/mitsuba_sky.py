@@ -25,26 +25,29 @@ import os
 import subprocess
 import sys
 import tempfile
-import tomllib
 
 import numpy as np
-from mitsuba_cornell_mesh import SceneFileError, fail, rgb, vec3
+from mitsuba_cornell_mesh import (
+    SceneFileError,
+    base_scene,
+    fail,
+    load_toml,
+    read_camera,
+    rgb,
+    vec3,
+)
+from mitsuba_mesh import DEFAULT_IOR, bsdf, xtask
 from mitsuba_passes import Passes
 
 UPSAMPLE = 8
-CAMERA_KEYS = {"position", "look_at", "up", "vfov"}
 SPHERE_KEYS = {"name", "center", "radius", "color", "material", "ior"}
-DEFAULT_IOR = 1.5  # ptui's (src/scene/load.rs)
+
 
 
 def read_scene(path):
     """The environment, camera and spheres of a ptui scene file, checked for what this harness
     supports."""
-    try:
-        with open(path, "rb") as f:
-            desc = tomllib.load(f)
-    except (OSError, tomllib.TOMLDecodeError) as e:
-        raise SceneFileError(f"{path}: {e}") from e
+    desc = load_toml(path)
     unsupported = set(desc) - {"environment", "camera", "render", "sphere"}
     if unsupported:
         fail(path, ", ".join(sorted(unsupported)), "not supported by this harness")
@@ -52,19 +55,7 @@ def read_scene(path):
     if env.get("map") != "builtin:sky" or set(env) - {"map", "intensity"}:
         fail(path, "environment", 'only map = "builtin:sky" with an intensity is supported')
     intensity = float(env.get("intensity", 1.0))
-    cam = desc.get("camera", {})
-    extra = set(cam) - CAMERA_KEYS
-    if extra:
-        fail(path, "camera", f"unknown keys {sorted(extra)}")
-    for key in ("position", "look_at", "vfov"):
-        if key not in cam:
-            fail(path, f"camera.{key}", "missing")
-    camera = {
-        "position": vec3(path, "camera.position", cam["position"]),
-        "look_at": vec3(path, "camera.look_at", cam["look_at"]),
-        "up": vec3(path, "camera.up", cam.get("up", [0, 1, 0])),
-        "vfov": float(cam["vfov"]),
-    }
+    camera = read_camera(path, desc)
     spheres = []
     for i, s in enumerate(desc.get("sphere", [])):
         where = f"sphere[{i}] ({s.get('name', 'unnamed')})"
@@ -82,7 +73,7 @@ def read_scene(path):
                 "name": s.get("name", f"sphere {i}"),
                 "center": vec3(path, f"{where}.center", s["center"]),
                 "radius": float(s["radius"]),
-                "material": material,
+                "kind": material,
                 "color": color,
                 "ior": float(s.get("ior", DEFAULT_IOR)),
             }
@@ -108,50 +99,12 @@ def mitsuba_map(ptui_map):
     return np.ascontiguousarray(out)
 
 
-def bsdf(s):
-    c = s["color"].tolist()
-    if s["material"] == "mirror":
-        return {
-            "type": "conductor",
-            "material": "none",
-            "specular_reflectance": {"type": "rgb", "value": c},
-        }
-    if s["material"] == "glass":
-        return {"type": "dielectric", "int_ior": s["ior"], "ext_ior": 1.0}
-    return {"type": "diffuse", "reflectance": {"type": "rgb", "value": c}}
-
-
 def build_scene(mi, intensity, camera, spheres, sky, width, height):
-    T = mi.ScalarTransform4f
-    scene = {
-        "type": "scene",
-        "integrator": {"type": "path", "max_depth": -1, "hide_emitters": False},
-        "sensor": {
-            "type": "perspective",
-            "fov": camera["vfov"],
-            "fov_axis": "y",
-            "near_clip": 1e-3,
-            "far_clip": 1e7,
-            "to_world": T().look_at(
-                origin=camera["position"].tolist(),
-                target=camera["look_at"].tolist(),
-                up=camera["up"].tolist(),
-            ),
-            "sampler": {"type": "independent"},
-            "film": {
-                "type": "hdrfilm",
-                "width": width,
-                "height": height,
-                "pixel_format": "rgb",
-                "component_format": "float32",
-                "rfilter": {"type": "box"},
-            },
-        },
-        "sky": {
-            "type": "envmap",
-            "bitmap": mi.Bitmap(sky.astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB),
-            "scale": intensity,
-        },
+    scene = base_scene(mi, camera, width, height)
+    scene["sky"] = {
+        "type": "envmap",
+        "bitmap": mi.Bitmap(sky.astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB),
+        "scale": intensity,
     }
     for i, s in enumerate(spheres):
         scene[f"sphere{i}"] = {
@@ -198,7 +151,6 @@ def main():
     ap.add_argument("--passes", type=int, default=32, help="independent passes (seeds)")
     ap.add_argument("--seed", type=int, default=0, help="seed of the first pass")
     ap.add_argument("--variant", default="scalar_rgb", choices=["scalar_rgb", "llvm_ad_rgb"])
-    ap.add_argument("--xtask", default="cargo xtask", help="how to run ptui's xtask")
     args = ap.parse_args()
     if args.passes < 2 or args.spp < 1 or args.width < 1 or args.height < 1:
         ap.error("need --passes >= 2 and positive --spp, --width, --height")
@@ -213,7 +165,7 @@ def main():
 
     with tempfile.TemporaryDirectory() as workdir:
         exr = os.path.join(workdir, "sky.exr")
-        subprocess.run(args.xtask.split() + ["sky-map", exr], check=True, cwd=root)
+        subprocess.run(xtask() + ["sky-map", exr], check=True, cwd=root)
         ptui_map = np.array(mi.Bitmap(exr), dtype=np.float64)[:, :, :3]
     print(f"ptui's sky: {ptui_map.shape[1]}x{ptui_map.shape[0]}, given to Mitsuba "
           f"{UPSAMPLE}x finer")
