@@ -26,7 +26,7 @@ use anyhow::Context;
 use app::{Action, App};
 use color::ColorChoice;
 use crossterm::queue;
-use crossterm::terminal::{BeginSynchronizedUpdate, EndSynchronizedUpdate};
+use crossterm::terminal::{BeginSynchronizedUpdate, Clear, ClearType, EndSynchronizedUpdate};
 use event::Event;
 use graphics::GraphicsChoice;
 use std::io::{IsTerminal, Write};
@@ -247,10 +247,22 @@ fn film_path(app: &App) -> PathBuf {
 /// are on (the preview's cells are blank then, so the cell diff never overwrites them).
 fn draw(terminal: &mut term::Term, app: &mut App) -> std::io::Result<()> {
     queue!(terminal.backend_mut(), BeginSynchronizedUpdate)?;
-    terminal.draw(|f| view::draw(f, app))?;
     let overlay = app.show_help
         || app.show_details
         || layout::layout(app.size, app.show_chart).preview.is_none();
+    if app
+        .graphics
+        .as_ref()
+        .is_some_and(|g| g.wants_clear(overlay))
+    {
+        // Erase the screen (and its sixel pixels), and forget the last frame so that every
+        // cell is drawn again. Not `Terminal::clear`: it asks the terminal for the cursor
+        // position, whose reply the input thread takes (ptui then failed at start with "the
+        // cursor position could not be read").
+        queue!(terminal.backend_mut(), Clear(ClearType::All))?;
+        terminal.swap_buffers();
+    }
+    terminal.draw(|f| view::draw(f, app))?;
     if let Some(g) = app.graphics.as_mut() {
         let mut out = Vec::new();
         g.emit(&mut out, Instant::now(), overlay);

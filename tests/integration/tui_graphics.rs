@@ -523,3 +523,64 @@ fn steady_state_bytes_stay_within_the_budget() {
         );
     }
 }
+
+/// The first frame comes before the first samples: every tile is sent black. When the render
+/// reaches them, those tiles are all resent at once, not at the budget's pace (in xterm the
+/// preview was still mostly black 4 s after start).
+#[test]
+fn tiles_sent_black_are_resent_at_once_when_the_render_reaches_them() {
+    let area = Rect::new(0, 0, 80, 30);
+    let view = ViewState::default();
+    for protocol in [Protocol::Kitty, Protocol::Sixel] {
+        let mut pic = Picture::new(protocol, (8, 16));
+        let t0 = Instant::now();
+        pic.update(
+            &snapshot(320, 240, |_, _| [0.0; 3]),
+            area,
+            &view,
+            1.0,
+            Tonemap::Aces,
+        );
+        let mut out = Vec::new();
+        pic.emit(&mut out, t0, false);
+        let tiles = pic.tiles().len();
+        // 0.1 s later: a budget of 8 KB, far less than the whole picture.
+        pic.update(&snapshot(320, 240, scene), area, &view, 1.0, Tonemap::Aces);
+        out.clear();
+        let n = pic.emit(&mut out, t0 + Duration::from_millis(100), false);
+        let (placed, deletes) = decode(&out);
+        assert_eq!((placed.len(), deletes), (tiles, 0), "{protocol:?}");
+        assert!(
+            n as f64 > BYTES_PER_SECOND / 10.0,
+            "{protocol:?}: {n} bytes"
+        );
+        assert!(!pic.pending(), "{protocol:?}");
+    }
+}
+
+/// Sixel pixels stay until drawn over: the screen is wiped before an overlay opens and before
+/// a new view is sent, never for kitty (whose images are deleted) nor for a budgeted frame.
+#[test]
+fn sixel_wipes_the_screen_before_an_overlay_and_a_new_view() {
+    let area = Rect::new(0, 0, 24, 6);
+    let view = ViewState::default();
+    for protocol in [Protocol::Kitty, Protocol::Sixel] {
+        let sixel = protocol == Protocol::Sixel;
+        let mut pic = Picture::new(protocol, (8, 16));
+        let t0 = Instant::now();
+        assert!(!pic.wants_clear(false), "nothing to replace yet");
+        pic.update(&snapshot(192, 96, scene), area, &view, 1.0, Tonemap::Aces);
+        assert_eq!(pic.wants_clear(false), sixel, "{protocol:?}: a new view");
+        let mut out = Vec::new();
+        pic.emit(&mut out, t0, false);
+        assert!(!pic.wants_clear(false), "{protocol:?}: the same view");
+        assert_eq!(
+            pic.wants_clear(true),
+            sixel,
+            "{protocol:?}: an overlay opens"
+        );
+        pic.emit(&mut out, t0, true);
+        assert!(!pic.wants_clear(true), "{protocol:?}: the overlay stays");
+        assert_eq!(pic.wants_clear(false), sixel, "{protocol:?}: it closes");
+    }
+}

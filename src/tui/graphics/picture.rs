@@ -47,6 +47,19 @@ pub struct Tile {
     sent: Option<Vec<u8>>,
 }
 
+impl Tile {
+    /// Whether the terminal shows this tile all black: sent before the render reached it (the
+    /// first frame comes before the first samples). Such a tile is resent outside the byte
+    /// budget once it has something to show, else a noisy render at the budget takes many
+    /// seconds to fill the preview (measured in xterm: 4 s after start most tiles were
+    /// still black). It goes from black to the picture once per view, so this is bounded.
+    fn shown_blank(&self) -> bool {
+        self.sent
+            .as_ref()
+            .is_some_and(|p| p.iter().all(|&v| v == 0))
+    }
+}
+
 pub struct Picture {
     pub protocol: Protocol,
     /// Size of a terminal cell in pixels.
@@ -189,6 +202,20 @@ impl Picture {
         }
     }
 
+    /// Whether the screen must be wiped before the next frame: sixel pixels stay until
+    /// something is drawn over them, and the cell diff does not rewrite a blank cell that
+    /// stays blank. So before an overlay is drawn over the picture (its blank cells would
+    /// show the picture through, seen in xterm), and before a new view is sent (the old
+    /// view's pixels outside the new picture would stay). Kitty deletes its images instead.
+    pub fn wants_clear(&self, overlay: bool) -> bool {
+        self.protocol == Protocol::Sixel
+            && if overlay {
+                !self.hidden
+            } else {
+                self.key.is_some() && (self.full || self.hidden)
+            }
+    }
+
     /// Whether tiles are still waiting for the budget (the main loop keeps drawing).
     pub fn pending(&self) -> bool {
         !self.hidden && (self.full || self.tiles.iter().any(|t| self.moved(t).is_some()))
@@ -258,8 +285,9 @@ impl Picture {
         };
         for k in order {
             // A tile may overdraw the budget; the next ones wait until it is paid back.
-            if !full_send && self.tokens <= 0.0 {
-                break;
+            let paid = !full_send && !self.tiles[k].shown_blank();
+            if paid && self.tokens <= 0.0 {
+                continue;
             }
             let pixels = self.tile_pixels(k);
             let t = &self.tiles[k];
@@ -283,7 +311,7 @@ impl Picture {
                 ),
                 Protocol::Sixel => sixel::encode(out, &pixels, w, h),
             }
-            if !full_send {
+            if paid {
                 self.tokens -= (out.len() - before) as f64;
             }
             self.tiles[k].sent = Some(pixels);
