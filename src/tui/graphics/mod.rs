@@ -5,7 +5,7 @@
 //! moved by more than the display's quantisation since it was last sent, the most-changed
 //! tiles first, and at steady state no faster than [`BYTES_PER_SECOND`]; frames come at most
 //! `--fps` times a second like every other redraw. A new view (zoom, pan, resize, exposure)
-//! resends everything at once.
+//! resends everything ahead of that budget, [`BURST_PER_FRAME`] a frame.
 
 pub mod detect;
 pub mod kitty;
@@ -18,8 +18,16 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 /// Steady-state budget of image bytes written to the terminal per second (tiles changed by a
-/// converging render). A view change is sent whole, outside the budget.
+/// converging render). A view change is sent outside the budget.
 pub const BYTES_PER_SECOND: f64 = 80_000.0;
+
+/// Image bytes a frame may write for tiles the terminal shows nothing of (a new view, tiles sent
+/// black before the render reached them), ahead of [`BYTES_PER_SECOND`]. One write of a whole
+/// view blocked the UI for its duration: xterm took 3-4 s to draw the 3.4 MB of sixel of a
+/// noisy 1280x960 film, and keys waited. In pieces of this size a fast terminal still fills a
+/// typical view (0.3-1.7 MB) within a second at 10 frames a second, and a slow one takes keys
+/// between pieces.
+pub const BURST_PER_FRAME: f64 = 128.0 * 1024.0;
 
 /// How long to wait for the terminal's answer to the queries.
 pub const QUERY_TIMEOUT: Duration = Duration::from_millis(200);

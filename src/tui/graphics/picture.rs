@@ -2,7 +2,7 @@
 //! pan as in the cell preview), cut into tiles of whole cells, and which tiles the terminal
 //! still has to receive.
 
-use super::{kitty, sixel, Protocol, BYTES_PER_SECOND};
+use super::{kitty, sixel, Protocol, BURST_PER_FRAME, BYTES_PER_SECOND};
 use crate::io::output::display_rgb;
 use crate::session::Snapshot;
 use crate::settings::Tonemap;
@@ -48,15 +48,14 @@ pub struct Tile {
 }
 
 impl Tile {
-    /// Whether the terminal shows this tile all black: sent before the render reached it (the
-    /// first frame comes before the first samples). Such a tile is resent outside the byte
-    /// budget once it has something to show, else a noisy render at the budget takes many
-    /// seconds to fill the preview (measured in xterm: 4 s after start most tiles were
-    /// still black). It goes from black to the picture once per view, so this is bounded.
+    /// Whether the terminal shows nothing of this tile: not sent in this view, or sent all
+    /// black before the render reached it (the first frame comes before the first samples).
+    /// Such a tile goes out ahead of the byte budget ([`BURST_PER_FRAME`] a frame), else a
+    /// noisy render at the budget takes many seconds to fill the preview (measured in xterm:
+    /// 4 s after start most tiles were still black). A tile is blank once per view, so this
+    /// is bounded.
     fn shown_blank(&self) -> bool {
-        self.sent
-            .as_ref()
-            .is_some_and(|p| p.iter().all(|&v| v == 0))
+        self.sent.as_ref().is_none_or(|p| p.iter().all(|&v| v == 0))
     }
 }
 
@@ -243,10 +242,17 @@ impl Picture {
         big.then_some(sum as f64 / n)
     }
 
-    /// Append to `out` what the terminal needs to show the picture now: everything after a new
-    /// view, else the most-changed tiles within the byte budget. With `overlay`, the picture
-    /// is taken off the screen (kitty) or left to be drawn over (sixel), and sent whole when
-    /// the overlay closes. Returns the image bytes appended.
+    /// Whether tiles the terminal shows nothing of are still waiting for their burst (a new view
+    /// being filled in, [`BURST_PER_FRAME`] a frame).
+    pub fn filling(&self) -> bool {
+        !self.hidden && (self.full || self.tiles.iter().any(Tile::shown_blank))
+    }
+
+    /// Append to `out` what the terminal needs to show the picture now: the tiles it shows
+    /// nothing of (all of them after a new view) up to [`BURST_PER_FRAME`], and the
+    /// most-changed others within the byte budget. With `overlay`, the picture is taken off the
+    /// screen (kitty) or left to be drawn over (sixel), and sent again when the overlay closes.
+    /// Returns the image bytes appended.
     pub fn emit(&mut self, out: &mut Vec<u8>, now: Instant, overlay: bool) -> usize {
         let start = out.len();
         let dt = self
@@ -269,24 +275,26 @@ impl Picture {
             self.hidden = false;
             self.full = true;
         }
-        let full_send = self.full;
-        let order: Vec<usize> = if self.full {
+        if self.full {
             self.full = false;
             if self.protocol == Protocol::Kitty {
                 out.extend_from_slice(kitty::DELETE_ALL);
             }
-            (0..self.tiles.len()).collect()
-        } else {
-            let mut scored: Vec<(usize, f64)> = (0..self.tiles.len())
-                .filter_map(|k| self.moved(&self.tiles[k]).map(|s| (k, s)))
-                .collect();
-            scored.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-            scored.into_iter().map(|(k, _)| k).collect()
-        };
-        for k in order {
-            // A tile may overdraw the budget; the next ones wait until it is paid back.
-            let paid = !full_send && !self.tiles[k].shown_blank();
-            if paid && self.tokens <= 0.0 {
+            // The terminal shows none of the picture now (deleted, or wiped with the screen).
+            for t in &mut self.tiles {
+                t.sent = None;
+            }
+        }
+        // Most-changed first; tiles never sent rank first, top to bottom.
+        let mut scored: Vec<(usize, f64)> = (0..self.tiles.len())
+            .filter_map(|k| self.moved(&self.tiles[k]).map(|s| (k, s)))
+            .collect();
+        scored.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        let mut burst = BURST_PER_FRAME;
+        for (k, _) in scored {
+            // A tile may overdraw its allowance; the next ones wait until it is paid back.
+            let paid = !self.tiles[k].shown_blank();
+            if (if paid { self.tokens } else { burst }) <= 0.0 {
                 continue;
             }
             let pixels = self.tile_pixels(k);
@@ -311,8 +319,11 @@ impl Picture {
                 ),
                 Protocol::Sixel => sixel::encode(out, &pixels, w, h),
             }
+            let bytes = (out.len() - before) as f64;
             if paid {
-                self.tokens -= (out.len() - before) as f64;
+                self.tokens -= bytes;
+            } else {
+                burst -= bytes;
             }
             self.tiles[k].sent = Some(pixels);
         }
