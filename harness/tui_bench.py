@@ -3,9 +3,13 @@
 and key-to-screen latency. Runs the real binary in a pseudo-terminal of 120x40.
 
     cargo build --release && python3 harness/tui_bench.py [--seconds 30] [--bin target/release/ptui]
+    python3 harness/tui_bench.py --only bandwidth --modes kitty,sixel --ssh localhost
 
 Bandwidth: bytes the program writes to the pty, mean over the last 20 s of a 30 s render of
-cornell (320x240, path), in truecolor and in 256-colour mode.
+cornell (320x240, path), in truecolor and in 256-colour mode, or in the `--modes` given (`kitty`
+and `sixel` are the pixel preview, `--graphics` forced; the pty reports no pixel size, so cells
+of 8x16). With `--ssh HOST` the bandwidth runs go to HOST through `ssh -tt` (key login, the same path
+to the binary there) and the bytes counted are those that arrive through the SSH session.
 Throughput: samples per second of render time, TUI (from its --bench-log) against headless
 `ptui render` at the same settings, alternated in one run.
 Latency: time from writing `?` to the pty until the help overlay's bytes arrive, while the
@@ -75,18 +79,29 @@ def thread_cpu(pid):
 
 CPU = []
 
+SSH = None
+
 def bandwidth(bin, mode, seconds, log):
-    pid, fd = spawn([bin, "cornell", "--spp", "1000000", "--color", mode, "--bench-log", log],
-                    env_for(mode))
+    cmd = [bin, "cornell", "--spp", "1000000", "--bench-log", log]
+    if mode in ("kitty", "sixel"):
+        cmd += ["--graphics", mode, "--color", "truecolor"]
+    else:
+        cmd += ["--color", mode]
+    env = env_for(mode)
+    if SSH:
+        pass_env = [f"TERM={env['TERM']}"] + (["COLORTERM=truecolor"] if "COLORTERM" in env else [])
+        cmd = ["ssh", "-tt", "-o", "BatchMode=yes", SSH, "env"] + pass_env + cmd
+    pid, fd = spawn(cmd, env)
     t0 = time.monotonic()
     sink = []
     read_for(fd, seconds, sink)
-    cpu = thread_cpu(pid)
-    render = sum(v for k, v in cpu.items() if k.startswith("ptui-render"))
-    other = sum(v for k, v in cpu.items() if not k.startswith("ptui-render"))
-    CPU.append((render, other))
-    print(f"  CPU seconds: render threads {render:.2f}, everything else (UI, worker, input, "
-          f"tick) {other:.2f} -> {100 * other / (render + other):.2f}% of the process")
+    if not SSH:  # over SSH the local process is the client
+        cpu = thread_cpu(pid)
+        render = sum(v for k, v in cpu.items() if k.startswith("ptui-render"))
+        other = sum(v for k, v in cpu.items() if not k.startswith("ptui-render"))
+        CPU.append((render, other))
+        print(f"  CPU seconds: render threads {render:.2f}, everything else (UI, worker, input, "
+              f"tick) {other:.2f} -> {100 * other / (render + other):.2f}% of the process")
     finish(pid, fd)
     window = 20.0
     start = t0 + seconds - window
@@ -148,16 +163,23 @@ def main():
     ap.add_argument("--presses", type=int, default=100)
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--only", choices=["bandwidth", "throughput", "latency"])
+    ap.add_argument("--modes", default="truecolor,256",
+                    help="bandwidth modes, from truecolor, 256, kitty, sixel")
+    ap.add_argument("--ssh", metavar="HOST", help="run the TUI on HOST through ssh -tt")
     a = ap.parse_args()
+    global SSH
+    SSH = a.ssh
     tmp = tempfile.mkdtemp(prefix="ptui-bench-")
     print(f"load average before: {os.getloadavg()}")
-    for mode in ["truecolor", "256"] if a.only in (None, "bandwidth") else []:
+    for mode in a.modes.split(",") if a.only in (None, "bandwidth") else []:
         log = os.path.join(tmp, f"bw-{mode}.log")
         mean, total, per_s = bandwidth(a.bin, mode, a.seconds, log)
         print(f"bandwidth {mode}: mean over last 20 s {mean/1000:.1f} KB/s "
               f"(total {total/1000:.0f} KB in {a.seconds:.0f} s; per second KB: "
               f"{' '.join(f'{b/1000:.0f}' for b in per_s)})")
-        print(f"  TUI throughput during that run: {bench_rate(log)/1e6:.3f} M samples/s")
+        rate = bench_rate(log)
+        if rate:
+            print(f"  TUI throughput during that run: {rate/1e6:.3f} M samples/s")
     # Throughput: alternate TUI and headless so machine load hits both alike.
     tui, head, head_nice = [], [], []
     for r in range(a.rounds if a.only in (None, "throughput") else 0):
