@@ -73,8 +73,11 @@ impl WideNode {
         (self.child[j] != EMPTY).then_some((self.child[j], self.count[j]))
     }
 
+    /// Children held (for the cost probe). Inlined so that where the count goes unused it is
+    /// not computed: out of line, it was a third of a query's time.
+    #[inline(always)]
     fn slots(&self) -> u64 {
-        self.child.iter().filter(|&&c| c != EMPTY).count() as u64
+        self.child.map(|c| (c != EMPTY) as u64).iter().sum()
     }
 }
 
