@@ -31,6 +31,8 @@ const fn stack_size(max_depth: usize) -> usize {
     (WIDTH - 1) * max_depth + 1
 }
 const STACK: usize = stack_size(super::bvh::MAX_DEPTH);
+// Two cache lines a node.
+const _: () = assert!(std::mem::size_of::<WideNode>() == 128);
 
 /// A node: its children's boxes, plane by plane, and what each child is.
 #[repr(C, align(64))]
@@ -89,16 +91,6 @@ fn below(x: f64) -> f32 {
 /// The smallest f32 above `x`.
 fn above(x: f64) -> f32 {
     (x as f32).next_up()
-}
-
-/// `x` rounded up to an f32 (the nearest f32 >= x).
-fn round_up(x: f64) -> f32 {
-    let f = x as f32;
-    if (f as f64) < x {
-        f.next_up()
-    } else {
-        f
-    }
 }
 
 /// `x` rounded down to an f32.
@@ -189,23 +181,26 @@ const SHRINK: f64 = 1.0 / (1u64 << 21) as f64;
 const LIMIT: f64 = 1e30;
 /// Added to the exit distance before comparing: covers a product's absolute rounding error
 /// when it falls into the subnormal range (at most 2^-150), where relative bounds do not hold.
-const SLACK: f32 = f32::MIN_POSITIVE * (1.0 / (1u64 << 22) as f32);
+/// The smallest normal f32, not 2^-148: a subnormal operand costs a microcode assist on every
+/// node (it doubled the time of a one-primitive query).
+const SLACK: f32 = f32::MIN_POSITIVE;
 
 /// A ray prepared for the f32 box test.
 ///
 /// Why the test is conservative. Per axis with direction d > 0, the near plane is the box's min
 /// `lo` and the far plane its max `hi` (for d < 0 the two swap and the signs below flip; the
 /// argument is the same). The exact entry distance along the axis is (lo - o) / d; we compute
-/// `tn = fl(fl(lo - on) * in)` with `on` = o rounded up to f32 and `in` <= |1/d| (1 - 6u),
+/// `tn = fl(fl(lo - on) * in)` with `on` >= o an f32 and `in` <= |1/d| (1 - 6u),
 /// u = 2^-24 the unit roundoff. If lo - on > 0, each of the two roundings adds at most a
 /// factor (1 + u), so tn <= (lo - o) |1/d| (1 - 6u)(1 + u)^2 < (lo - o) / d; if lo - on <= 0,
 /// tn <= 0. So tn <= max(0, exact), and `near = max(0, tn_x, tn_y, tn_z)` is at most the exact
 /// entry distance (clamped at 0, as the f64 test does). Likewise the exit distance is computed
-/// with o rounded down and `if_` >= |1/d| (1 + 6u): whenever the exact exit is >= 0 (which it
+/// with an f32 <= o and `if_` >= |1/d| (1 + 6u): whenever the exact exit is >= 0 (which it
 /// is when the ray meets the box at t >= 0), tf >= it, since fl(x) >= x (1 - u) for x > 0. The
 /// bound (the current closest hit) is rounded up to f32. Hence near <= far whenever the exact
 /// ray meets the f32 box within [0, bound]. Outside the normal range: a subtraction whose
-/// result is subnormal is exact, a product that is adds at most 2^-150 ([`SLACK`] covers it);
+/// result is subnormal is exact, a product that is adds at most 2^-150 and rounds to at most
+/// 2^-126, so comparing with the exit distance plus [`SLACK`] = 2^-126 covers it;
 /// overflow rounds to an infinity of the right sign, which keeps each inequality. No NaN can
 /// arise: the origin and inverse direction are finite and nonzero (else the ray takes the f64
 /// test), an empty slot's planes are infinities of the sign that makes it rejected.
@@ -226,8 +221,25 @@ pub(super) struct RayF32 {
 }
 
 impl RayF32 {
-    /// None when the f32 test cannot bound this ray (see [`LIMIT`]).
+    /// None when the f32 test cannot bound this ray (see [`LIMIT`]). Branch-free but for that
+    /// check: it runs once per query, and for small scenes it was a third of the query.
+    #[inline]
     pub(super) fn new(ray: &Ray) -> Option<Self> {
+        let inv = ray.d.recip();
+        let (o, a) = (ray.o, inv.abs());
+        // Negated comparisons so NaN falls back too.
+        if !(o.abs().max_element() <= LIMIT
+            && a.max_element() <= LIMIT
+            && a.min_element() >= 1.0 / LIMIT)
+        {
+            return None;
+        }
+        // The origin moved outward before rounding to nearest: by 2^-21 relative (beyond the
+        // cast's 2^-24) and 2^-126 absolute (beyond its absolute error where the f32 is
+        // subnormal), so `up` >= o >= `down`; one ulp or two more than needed, no branches.
+        let pad = o.abs() * SHRINK + f32::MIN_POSITIVE as f64;
+        let (up, down) = ((o + pad).to_array(), (o - pad).to_array());
+        let inv = inv.to_array();
         let mut r = RayF32 {
             o_near: [0.0; 3],
             o_far: [0.0; 3],
@@ -237,19 +249,13 @@ impl RayF32 {
             far_row: [0; 3],
         };
         for k in 0..3 {
-            let (o, inv) = (ray.o[k], 1.0 / ray.d[k]);
-            // Negated comparisons so NaN falls back too.
-            if !(o.abs() <= LIMIT && inv.abs() <= LIMIT && inv.abs() >= 1.0 / LIMIT) {
-                return None;
-            }
-            let pos = inv > 0.0;
-            let (up, down) = (round_up(o), round_down(o));
-            r.o_near[k] = if pos { up } else { down };
-            r.o_far[k] = if pos { down } else { up };
-            r.inv_near[k] = (inv * (1.0 - SHRINK)) as f32;
-            r.inv_far[k] = (inv * (1.0 + SHRINK)) as f32;
-            r.near_row[k] = if pos { k } else { k + 3 };
-            r.far_row[k] = if pos { k + 3 } else { k };
+            let pos = inv[k] > 0.0;
+            r.o_near[k] = (if pos { up[k] } else { down[k] }) as f32;
+            r.o_far[k] = (if pos { down[k] } else { up[k] }) as f32;
+            r.inv_near[k] = (inv[k] * (1.0 - SHRINK)) as f32;
+            r.inv_far[k] = (inv[k] * (1.0 + SHRINK)) as f32;
+            r.near_row[k] = k + 3 * (!pos as usize);
+            r.far_row[k] = k + 3 * (pos as usize);
         }
         Some(r)
     }
@@ -259,8 +265,8 @@ impl RayF32 {
 /// the default build has it), plain arrays elsewhere.
 #[cfg(target_arch = "x86_64")]
 mod lanes4 {
-    //! SAFETY (every `unsafe` here): the intrinsics need SSE (and SSE2), which every x86-64
-    //! CPU has and every build for the target enables; loads and stores are unaligned.
+    // SAFETY (every `unsafe` here): the intrinsics need SSE (and SSE2), which every x86-64
+    // CPU has and every build for the target enables; loads and stores are unaligned.
     use std::arch::x86_64::*;
 
     #[derive(Clone, Copy)]
@@ -363,7 +369,7 @@ use lanes4::F4;
 
 /// The f32 test of a node's four boxes for t in [0, bound]: bit j of the mask set if child j
 /// may be hit, and lane j a lower bound of its entry distance. `bound` is the f64 bound rounded
-/// up ([`round_up`]).
+/// up ([`Fast::set_bound`]).
 #[inline(always)]
 pub(super) fn test_f32(n: &WideNode, r: &RayF32, bound: f32) -> (u32, [f32; WIDTH]) {
     let axis = |k: usize| {
@@ -407,17 +413,35 @@ trait NodeTest {
 
 struct Fast {
     ray: RayF32,
+    /// The bound rounded up, and that plus [`SLACK`] (for popped entries).
     bound: f32,
+    cull: f32,
+}
+
+impl Fast {
+    fn new(ray: RayF32, bound: f64) -> Fast {
+        let mut f = Fast {
+            ray,
+            bound: 0.0,
+            cull: 0.0,
+        };
+        f.set_bound(bound);
+        f
+    }
 }
 
 impl NodeTest for Fast {
     #[inline(always)]
     fn set_bound(&mut self, bound: f64) {
-        self.bound = round_up(bound);
+        // Rounded up without branches (it runs after every leaf): moved up by 2^-21 relative
+        // and 2^-126 absolute, beyond the cast's rounding. (A negative bound admits no hit;
+        // then any bound will do.)
+        self.bound = (bound * (1.0 + SHRINK) + f32::MIN_POSITIVE as f64) as f32;
+        self.cull = self.bound + SLACK;
     }
     #[inline(always)]
     fn beyond(&self, near: f32) -> bool {
-        near > self.bound + SLACK
+        near > self.cull
     }
     #[inline(always)]
     fn test(&self, n: &WideNode) -> (u32, [f32; WIDTH]) {
@@ -480,13 +504,7 @@ pub(super) fn traverse<const ORDERED: bool>(
         return 0;
     }
     match RayF32::new(ray) {
-        Some(r) => {
-            let test = Fast {
-                ray: r,
-                bound: round_up(t_max),
-            };
-            walk::<ORDERED, _, _>(nodes, test, t_max, leaf)
-        }
+        Some(r) => walk::<ORDERED, _, _>(nodes, Fast::new(r, t_max), t_max, leaf),
         None => walk_exact::<ORDERED, _>(nodes, ray, t_max, leaf),
     }
 }
@@ -702,7 +720,7 @@ mod tests {
             let Some(r) = RayF32::new(&ray) else {
                 continue;
             };
-            let (mask, near) = test_f32(&node_of(&b), &r, round_up(bound));
+            let (mask, near) = Fast::new(r, bound).test(&node_of(&b));
             let f64_accepts = slab(&b, o, inv, bound).is_some();
             // An exactly rounded point inside the box at a t within the bound.
             let t = dist.min(bound);
@@ -744,11 +762,5 @@ mod tests {
                 assert_eq!(test_f32(&n, &r, f32::INFINITY).0, 0);
             }
         }
-    }
-
-    #[test]
-    fn the_stack_holds_the_deepest_tree() {
-        assert!(STACK >= (WIDTH - 1) * super::super::bvh::MAX_DEPTH);
-        assert_eq!(std::mem::size_of::<WideNode>(), 128);
     }
 }
