@@ -173,8 +173,9 @@ fn emit<N: BinaryNode>(bin: &[N], root: usize, out: &mut Vec<WideNode>) -> u32 {
     index as u32
 }
 
-/// Slack of the f32 inverse direction: [`RayF32`] scales it by 1 -+ 2^-21 (eight unit
-/// roundoffs of f32).
+/// Relative slack (eight unit roundoffs of f32) of what is rounded to f32 per query: the inverse
+/// direction is scaled by 1 -+ 2^-21, the origin and the bound moved outward by 2^-21 of their
+/// size, so rounding to nearest lands on the safe side.
 const SHRINK: f64 = 1.0 / (1u64 << 21) as f64;
 /// Coordinates and inverse-direction magnitudes the f32 test takes (inverse directions at least
 /// 1 / LIMIT): their f32 copies stay finite and normal.
