@@ -1,13 +1,14 @@
 //! Bounding volume hierarchy: binned SAH build (Wald 2007, pbrt-v4's `BVHAggregate` with
-//! buckets) into one flat, depth-first node array; one traversal with a fixed-size stack, which
-//! the closest-hit and any-hit queries (and the cost probe) call with their own leaf test.
+//! buckets) into a binary, depth-first node array, collapsed into four-wide nodes with f32 boxes
+//! ([`super::wide`], which also holds the traversal); the closest-hit and any-hit queries (and
+//! the cost probe) run that traversal with their own leaf test.
 //!
 //! Results are exactly those of the flat scan ([`super::flat`]): the same shapes are tested with
-//! the same arithmetic, box tests are conservative (boxes padded, slab distances widened by their
-//! rounding bound), and when two primitives are hit at exactly the same distance the lower index
-//! wins, as it does in the flat scan's in-order loop.
+//! the same arithmetic, box tests are conservative (boxes padded, f32 boxes rounded outward, the
+//! f32 test's distances bounded for its rounding), and when two primitives are hit at exactly the
+//! same distance the lower index wins, as it does in the flat scan's in-order loop.
 
-use crate::geometry::triangle::gamma;
+use super::wide::{self, BinaryNode, WideNode};
 use crate::geometry::{Aabb, Hit};
 use crate::geometry::{Primitive, Shape};
 use crate::math::{DVec3, Ray};
@@ -33,36 +34,43 @@ const SAH_DEPTH: usize = 48;
 /// plenty for rayon to balance).
 const PARALLEL_MIN: usize = 16 * 1024;
 const PARALLEL_DEPTH: usize = 4;
-/// Traversal stack: at most one entry per level, and the depth is below SAH_DEPTH + 32.
-const STACK: usize = 96;
+/// Bound on the binary tree's depth (so on the wide tree's): SAH splits for SAH_DEPTH levels,
+/// then halving splits, at most 32 more for u32 indices.
+pub(super) const MAX_DEPTH: usize = 96;
 
+/// A node of the binary tree the build makes (and [`wide::collapse`] turns into wide nodes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Node {
-    /// The box's corners as arrays: as `DVec3`s (padded to 32 bytes) a node would take 96 bytes,
-    /// not 64, which slowed torus-knot (benches/HISTORY.md#bvh-node-size).
+    /// The box's corners as arrays (as `DVec3`s, padded to 32 bytes, they took more memory).
     corners: [[f64; 3]; 2],
     /// Leaf: first index into `order`. Interior: index of the second child (the first child is
     /// the next node).
     offset: u32,
     /// Leaf: number of primitives (> 0). Interior: 0.
     count: u32,
-    /// Interior: split axis, to visit the child nearer the ray first.
-    axis: u8,
 }
 
-impl Node {
-    #[inline(always)]
+impl BinaryNode for Node {
     fn bounds(&self) -> Aabb {
         Aabb {
             min: DVec3::from_array(self.corners[0]),
             max: DVec3::from_array(self.corners[1]),
         }
     }
+
+    fn leaf(&self) -> Option<(u32, u32)> {
+        (self.count > 0).then_some((self.offset, self.count))
+    }
+
+    fn second(&self) -> usize {
+        self.offset as usize
+    }
 }
 
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    nodes: Vec<Node>,
+    /// The four-wide tree; the binary one it was collapsed from is dropped after the build.
+    nodes: Vec<WideNode>,
     /// Primitive indices; each leaf owns a contiguous range.
     order: Vec<u32>,
     /// The primitives' shapes in `order`: a leaf's shapes sit next to each other in memory
@@ -126,6 +134,7 @@ impl Bvh {
             };
             build_node(&mut build, 0, 0, &mut nodes, &ctx);
         }
+        let nodes = wide::collapse(&nodes);
         let order: Vec<u32> = build.par_iter().map(|b| b.index).collect();
         let shapes = order.par_iter().map(|&i| prims[i as usize].shape).collect();
         Bvh {
@@ -142,7 +151,7 @@ impl Bvh {
 
     /// Bytes the tree holds: nodes, the leaf order and the shapes copied into leaf order.
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node>()
+        self.nodes.len() * std::mem::size_of::<WideNode>()
             + self.order.len() * std::mem::size_of::<u32>()
             + self.shapes.len() * std::mem::size_of::<Shape>()
     }
@@ -206,61 +215,19 @@ impl Bvh {
         hit
     }
 
-    /// The one traversal behind every query: a depth-first walk with a fixed-size stack over
-    /// the nodes whose boxes the ray meets within the bound (t_max to start with). Each leaf's
-    /// range of `order`/`shapes` goes to `leaf`, which may lower the bound (closest hit) and
-    /// returns true to end the walk (any hit). `ORDERED` visits the child on the ray's near side
-    /// of the split first (closest hit: the bound falls sooner); unordered, the first child
-    /// first. Returns the number of boxes tested (for [`Self::probe_cost`]; unused, it compiles
-    /// away). Generic over `leaf` so every query gets its own inlined copy of the loop.
     #[inline(always)]
     fn traverse<const ORDERED: bool>(
         &self,
         ray: &Ray,
         t_max: f64,
-        mut leaf: impl FnMut(Range<usize>, &mut f64) -> bool,
+        leaf: impl FnMut(Range<usize>, &mut f64) -> bool,
     ) -> u64 {
-        if self.nodes.is_empty() {
-            return 0;
-        }
-        let inv = ray.d.recip();
-        let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
-        let mut bound = t_max;
-        let mut boxes = 0u64;
-        let mut stack = [0u32; STACK];
-        let mut sp = 0usize;
-        let mut node = 0usize;
-        loop {
-            let n = &self.nodes[node];
-            boxes += 1;
-            if hit_box(&n.bounds(), ray.o, inv, bound) {
-                if n.count > 0 {
-                    let range = n.offset as usize..(n.offset + n.count) as usize;
-                    if leaf(range, &mut bound) {
-                        return boxes;
-                    }
-                } else {
-                    let (first, second) = if ORDERED && neg[n.axis as usize] {
-                        (n.offset as usize, node + 1)
-                    } else {
-                        (node + 1, n.offset as usize)
-                    };
-                    stack[sp] = second as u32;
-                    sp += 1;
-                    node = first;
-                    continue;
-                }
-            }
-            if sp == 0 {
-                return boxes;
-            }
-            sp -= 1;
-            node = stack[sp] as usize;
-        }
+        wide::traverse::<ORDERED>(&self.nodes, ray, t_max, leaf)
     }
 
     /// Check the structure: every primitive in exactly one leaf, each primitive's box inside its
-    /// leaf's, each child's box inside its parent's. For tests; returns what is wrong.
+    /// leaf's, each node's children's boxes inside the box its parent keeps for it, every node
+    /// reached once. For tests; returns what is wrong.
     pub fn check(&self, prims: &[Primitive]) -> Result<(), String> {
         let mut seen = vec![0u32; prims.len()];
         if prims.is_empty() {
@@ -278,29 +245,34 @@ impl Bvh {
                 .get(i)
                 .ok_or_else(|| format!("node index {i} out of range"))?;
             visited += 1;
-            if let Some(p) = parent {
-                if !p.contains(&n.bounds()) {
-                    return Err(format!("node {i} is not inside its parent"));
+            for j in 0..wide::WIDTH {
+                let Some((child, count)) = n.child(j) else {
+                    continue;
+                };
+                let b = n.child_box(j);
+                if let Some(p) = parent {
+                    if !p.contains(&b) {
+                        return Err(format!("child {j} of node {i} is not inside its parent"));
+                    }
                 }
-            }
-            if n.count > 0 {
-                let range = n.offset as usize..(n.offset + n.count) as usize;
+                if count == 0 {
+                    stack.push((child as usize, Some(b)));
+                    continue;
+                }
+                let range = child as usize..child as usize + count as usize;
                 let leaf = self
                     .order
                     .get(range)
-                    .ok_or_else(|| format!("leaf {i} range out of order array"))?;
+                    .ok_or_else(|| format!("leaf {j} of node {i}: range out of order array"))?;
                 for &p in leaf {
                     let slot = seen
                         .get_mut(p as usize)
-                        .ok_or_else(|| format!("leaf {i} holds unknown primitive {p}"))?;
+                        .ok_or_else(|| format!("node {i} holds unknown primitive {p}"))?;
                     *slot += 1;
-                    if !n.bounds().contains(&prims[p as usize].shape.bounds()) {
-                        return Err(format!("primitive {p} sticks out of leaf {i}"));
+                    if !b.contains(&prims[p as usize].shape.bounds()) {
+                        return Err(format!("primitive {p} sticks out of its leaf in node {i}"));
                     }
                 }
-            } else {
-                stack.push((i + 1, Some(n.bounds())));
-                stack.push((n.offset as usize, Some(n.bounds())));
             }
         }
         if visited != self.nodes.len() {
@@ -311,17 +283,6 @@ impl Bvh {
             None => Ok(()),
         }
     }
-}
-
-/// Slab test against a box for t in [0, t_max]. The far distance is widened by its rounding
-/// bound (pbrt-v4's 1 + 2 gamma(3)) so a ray grazing the box is never rejected wrongly.
-#[inline]
-fn hit_box(b: &Aabb, o: DVec3, inv: DVec3, t_max: f64) -> bool {
-    let t0 = (b.min - o) * inv;
-    let t1 = (b.max - o) * inv;
-    let near = t0.min(t1).max_element().max(0.0);
-    let far = t0.max(t1).min_element() * (1.0 + 2.0 * gamma(3.0));
-    near <= far && near <= t_max
 }
 
 fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
@@ -351,7 +312,6 @@ fn build_node(
         corners: [bounds.min.to_array(), bounds.max.to_array()],
         offset: first as u32,
         count: prims.len() as u32,
-        axis: 0,
     });
     let n = prims.len();
     if n == 1 {
@@ -372,11 +332,11 @@ fn build_node(
             tick(progress, n as u64);
             return index;
         }
-        return split_at(prims, first, depth, nodes, index, axis, n / 2, ctx);
+        return split_at(prims, first, depth, nodes, index, n / 2, ctx);
     }
     if depth >= SAH_DEPTH {
         prims.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-        return split_at(prims, first, depth, nodes, index, axis, n / 2, ctx);
+        return split_at(prims, first, depth, nodes, index, n / 2, ctx);
     }
 
     // Bin centroids along the axis and sweep for the cheapest bucket boundary.
@@ -428,7 +388,7 @@ fn build_node(
     } else {
         mid
     };
-    split_at(prims, first, depth, nodes, index, axis, mid, ctx)
+    split_at(prims, first, depth, nodes, index, mid, ctx)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -438,7 +398,6 @@ fn split_at(
     depth: usize,
     nodes: &mut Vec<Node>,
     index: usize,
-    axis: usize,
     mid: usize,
     ctx: &BuildCtx,
 ) -> usize {
@@ -464,7 +423,6 @@ fn split_at(
     };
     nodes[index].offset = second as u32;
     nodes[index].count = 0;
-    nodes[index].axis = axis as u8;
     index
 }
 
@@ -497,6 +455,68 @@ fn partition(prims: &mut [BuildPrim], pred: impl Fn(&BuildPrim) -> bool) -> usiz
 mod tests {
     use super::*;
     use crate::accel::bench::random_prims;
+    use crate::accel::flat;
+    use crate::sampling::{warp, Rng};
+
+    /// Rays aimed at the primitives' vertices and edges (nudged by an ulp or two), where a box
+    /// test that rejects a hair too much would lose the hit; a tenth axis-parallel (the f64 test),
+    /// a tenth from far away. The wide tree must find what the flat scan finds, bit for bit.
+    #[test]
+    fn grazing_rays_find_what_the_flat_scan_finds() {
+        let mut rng = Rng::new(11);
+        for (n, seed) in [(2usize, 1u64), (17, 2), (300, 3), (5000, 4)] {
+            let prims = random_prims(n, seed);
+            let bvh = Bvh::build(&prims);
+            bvh.check(&prims).unwrap();
+            for i in 0..4000 {
+                let target = match &prims[rng.next_u64() as usize % n].shape {
+                    Shape::Triangle(t) => {
+                        let p = t.p();
+                        let (a, b) = (p[i % 3], p[(i + 1) % 3]);
+                        let w = if i % 2 == 0 { 0.0 } else { rng.next_f64() };
+                        a + (b - a) * w
+                    }
+                    Shape::Sphere(s) => {
+                        let b = s.bounds();
+                        b.centroid() + (b.max - b.centroid()) * rng.next_f64()
+                    }
+                };
+                let nudge = |x: f64, rng: &mut Rng| match rng.next_u64() % 3 {
+                    0 => x.next_up(),
+                    1 => x.next_down(),
+                    _ => x,
+                };
+                let target = DVec3::new(
+                    nudge(target.x, &mut rng),
+                    nudge(target.y, &mut rng),
+                    nudge(target.z, &mut rng),
+                );
+                let d = if i % 10 == 0 {
+                    [DVec3::X, -DVec3::Y, DVec3::Z][i % 3]
+                } else {
+                    warp::uniform_sphere((rng.next_f64(), rng.next_f64()))
+                };
+                let dist = if i % 10 == 5 {
+                    1e4
+                } else {
+                    2.0 * rng.next_f64()
+                };
+                let ray = Ray::new(target - d * dist, d);
+                let t_max = if i % 4 == 0 {
+                    dist * (1.0 + 1e-9)
+                } else {
+                    f64::INFINITY
+                };
+                let key = |h: Option<Hit>| h.map(|h| (h.prim, h.t.to_bits()));
+                assert_eq!(
+                    key(flat::intersect(&prims, &ray, t_max)),
+                    key(bvh.intersect(&prims, &ray, t_max)),
+                    "n {n} ray {ray:?} t_max {t_max}"
+                );
+                assert_eq!(flat::any_hit(&prims, &ray, t_max), bvh.any_hit(&ray, t_max));
+            }
+        }
+    }
 
     #[test]
     fn the_parallel_build_is_the_one_thread_build_node_for_node() {

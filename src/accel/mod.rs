@@ -16,6 +16,7 @@ pub mod bench;
 pub mod bvh;
 pub mod flat;
 pub mod lanes;
+mod wide;
 
 use crate::camera::Camera;
 use crate::geometry::Hit;
