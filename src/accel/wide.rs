@@ -83,14 +83,19 @@ impl WideNode {
     }
 }
 
-/// The largest f32 below `x` (the cast is within half an ulp, so one step down is below).
-fn below(x: f64) -> f32 {
-    (x as f32).next_down()
-}
-
-/// The smallest f32 above `x`.
-fn above(x: f64) -> f32 {
-    (x as f32).next_up()
+/// `b`'s planes as the rows of [`WideNode::planes`], rounded outward: each one f32 step beyond
+/// the f32 nearest the f64 plane (the cast is within half an ulp, so one step is beyond it).
+fn outward(b: &Aabb) -> [f32; 6] {
+    let below = |x: f64| (x as f32).next_down();
+    let above = |x: f64| (x as f32).next_up();
+    [
+        below(b.min.x),
+        below(b.min.y),
+        below(b.min.z),
+        above(b.max.x),
+        above(b.max.y),
+        above(b.max.z),
+    ]
 }
 
 /// `x` rounded down to an f32.
@@ -150,15 +155,7 @@ fn emit<N: BinaryNode>(bin: &[N], root: usize, out: &mut Vec<WideNode>) -> u32 {
     let index = out.len();
     out.push(WideNode::NONE);
     for (j, &k) in kids[..n].iter().enumerate() {
-        let b = bin[k].bounds();
-        let planes = [
-            below(b.min.x),
-            below(b.min.y),
-            below(b.min.z),
-            above(b.max.x),
-            above(b.max.y),
-            above(b.max.z),
-        ];
+        let planes = outward(&bin[k].bounds());
         let (child, count) = match bin[k].leaf() {
             Some((first, count)) => (first, count as u8),
             None => (emit(bin, k, out), 0),
@@ -614,27 +611,15 @@ mod tests {
     use super::*;
     use crate::sampling::{warp, Rng};
 
+    /// `b` rounded outward as a node holds it, in f64.
     fn rounded(b: &Aabb) -> Aabb {
-        let lo = |x| below(x) as f64;
-        let hi = |x| above(x) as f64;
-        Aabb {
-            min: DVec3::new(lo(b.min.x), lo(b.min.y), lo(b.min.z)),
-            max: DVec3::new(hi(b.max.x), hi(b.max.y), hi(b.max.z)),
-        }
+        node_of(b).child_box(0)
     }
 
     /// A node whose four slots all hold `b` rounded outward.
     fn node_of(b: &Aabb) -> WideNode {
         let mut n = WideNode::NONE;
-        let p = [
-            below(b.min.x),
-            below(b.min.y),
-            below(b.min.z),
-            above(b.max.x),
-            above(b.max.y),
-            above(b.max.z),
-        ];
-        for (row, v) in p.into_iter().enumerate() {
+        for (row, v) in outward(b).into_iter().enumerate() {
             n.planes[row] = [v; WIDTH];
         }
         n.child = [0; WIDTH];
