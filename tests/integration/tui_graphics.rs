@@ -551,31 +551,16 @@ fn tiles_sent_black_are_resent_ahead_of_the_budget() {
         // 0.1 s later: a budget of 8 KB, far less than the whole picture; the tiles go out in
         // bursts, the first one far over the budget, and all within the frames they need.
         pic.update(&snapshot(320, 240, scene), area, &view, 1.0, Tonemap::Aces);
-        let (mut frames, mut total, mut placed_all) = (0u64, 0, 0);
-        while pic.filling() {
-            out.clear();
-            let n = pic.emit(
-                &mut out,
-                t0 + Duration::from_millis(100 * (frames + 1)),
-                false,
-            );
-            if frames == 0 {
-                assert!(
-                    n as f64 > BYTES_PER_SECOND / 10.0,
-                    "{protocol:?}: {n} bytes"
-                );
-            }
-            let (placed, deletes) = decode(&out);
-            assert_eq!(deletes, 0, "{protocol:?}");
-            placed_all += placed.len();
-            total += n;
-            frames += 1;
-        }
-        assert_eq!(placed_all, tiles, "{protocol:?}");
+        let frames = fill_in(&mut pic, t0 + Duration::from_millis(100));
+        let first = frames.first().map_or(0, |f| f.bytes);
         assert!(
-            frames <= (total as f64 / BURST_PER_FRAME).ceil() as u64 + 1,
-            "{protocol:?}: {total} bytes in {frames} frames"
+            first as f64 > BYTES_PER_SECOND / 10.0,
+            "{protocol:?}: {first} bytes"
         );
+        assert!(frames.iter().all(|f| f.deletes == 0), "{protocol:?}");
+        let placed: usize = frames.iter().map(|f| f.placed.len()).sum();
+        assert_eq!(placed, tiles, "{protocol:?}");
+        assert_within_bursts(&frames, protocol);
         assert!(!pic.pending(), "{protocol:?}");
     }
 }
@@ -623,35 +608,71 @@ fn a_new_view_is_sent_in_bursts() {
         });
         pic.update(&noisy, area, &view, 1.0, Tonemap::Aces);
         let tiles = pic.tiles().len();
-        let (mut frames, mut total, mut seen) = (0, 0, Vec::new());
-        let mut out = Vec::new();
-        while pic.filling() {
-            out.clear();
-            let n = pic.emit(&mut out, t0 + Duration::from_millis(frames * 100), false);
-            let (placed, deletes) = decode(&out);
+        let frames = fill_in(&mut pic, t0);
+        for (k, f) in frames.iter().enumerate() {
             assert_eq!(
-                deletes,
-                usize::from(protocol == Protocol::Kitty && frames == 0)
+                f.deletes,
+                usize::from(protocol == Protocol::Kitty && k == 0)
             );
             // One tile may overdraw the burst (a tile is at most 64x64 pixels of RGB).
             assert!(
-                (n as f64) < BURST_PER_FRAME + 64.0 * 64.0 * 3.0 * 2.0,
-                "{protocol:?}: frame {frames} wrote {n} bytes"
+                (f.bytes as f64) < BURST_PER_FRAME + 64.0 * 64.0 * 3.0 * 2.0,
+                "{protocol:?}: frame {k} wrote {} bytes",
+                f.bytes
             );
-            seen.extend(placed.iter().map(|p| (p.row, p.col)));
-            total += n;
-            frames += 1;
         }
+        let seen: Vec<(u16, u16)> = frames
+            .iter()
+            .flat_map(|f| f.placed.iter().map(|p| (p.row, p.col)))
+            .collect();
         let mut sorted = seen.clone();
         sorted.sort_unstable();
         sorted.dedup();
         assert_eq!((seen.len(), sorted.len()), (tiles, tiles), "{protocol:?}");
         assert_eq!(seen, sorted, "{protocol:?}: top to bottom");
-        let needed = (total as f64 / BURST_PER_FRAME).ceil() as u64;
-        assert!(
-            frames > 1 && frames <= needed + 1,
-            "{protocol:?}: {total} bytes in {frames} frames"
+        assert!(frames.len() > 1, "{protocol:?}: one frame");
+        assert_within_bursts(&frames, protocol);
+        let total: usize = frames.iter().map(|f| f.bytes).sum();
+        eprintln!(
+            "{protocol:?}: {tiles} tiles, {total} bytes in {} frames",
+            frames.len()
         );
-        eprintln!("{protocol:?}: {tiles} tiles, {total} bytes in {frames} frames");
     }
+}
+
+/// One frame of [`fill_in`]: the bytes it wrote, the tiles it placed, the kitty deletes.
+struct Frame {
+    bytes: usize,
+    placed: Vec<Placed>,
+    deletes: usize,
+}
+
+/// Emit frames 100 ms apart from `t` while tiles wait for their burst.
+fn fill_in(pic: &mut Picture, t: Instant) -> Vec<Frame> {
+    let mut frames = Vec::new();
+    let mut out = Vec::new();
+    while pic.filling() {
+        out.clear();
+        let at = t + Duration::from_millis(100 * frames.len() as u64);
+        let bytes = pic.emit(&mut out, at, false);
+        let (placed, deletes) = decode(&out);
+        frames.push(Frame {
+            bytes,
+            placed,
+            deletes,
+        });
+    }
+    frames
+}
+
+/// The frames took no more than their bytes need at `BURST_PER_FRAME` a frame (plus one for
+/// the overdraw).
+fn assert_within_bursts(frames: &[Frame], protocol: Protocol) {
+    let total: usize = frames.iter().map(|f| f.bytes).sum();
+    let needed = (total as f64 / BURST_PER_FRAME).ceil() as usize;
+    assert!(
+        frames.len() <= needed + 1,
+        "{protocol:?}: {total} bytes in {} frames",
+        frames.len()
+    );
 }
