@@ -7,6 +7,7 @@
 //! corners (9 f64 each), the rays (origin and unit direction, 6 f64 each), and ptui's hit
 //! distance per ray (f64, infinity for a miss) so the script can check both found the same hits.
 
+use crate::obvhs_side;
 use anyhow::{Context, Result};
 use ptui::accel::{bench, Bvh};
 use ptui::geometry::{spawn_origin, Primitive, Shape, Triangle};
@@ -21,15 +22,15 @@ use std::time::Instant;
 /// Timings are the best of this many runs (the minimum sheds other processes' interference).
 const REPEATS: usize = 5;
 
-struct Workload {
-    name: String,
-    tris: Vec<[DVec3; 3]>,
-    rays: Vec<Ray>,
+pub(crate) struct Workload {
+    pub(crate) name: String,
+    pub(crate) tris: Vec<[DVec3; 3]>,
+    pub(crate) rays: Vec<Ray>,
 }
 
 /// `n` random triangles in the unit cube, sized as `ptui bench accel` sizes its primitives (a
 /// ray crosses a few whatever `n`), and that bench's random rays.
-fn soup(n: usize, rays: usize) -> Workload {
+pub(crate) fn soup(n: usize, rays: usize) -> Workload {
     let mut rng = Rng::new(n as u64);
     let size = 0.5 / (n as f64).cbrt();
     let point = |rng: &mut Rng| DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
@@ -101,7 +102,7 @@ fn knot() -> Result<(Workload, Workload)> {
     ))
 }
 
-fn primitives(tris: &[[DVec3; 3]]) -> Vec<Primitive> {
+pub(crate) fn primitives(tris: &[[DVec3; 3]]) -> Vec<Primitive> {
     tris.iter()
         .map(|t| Primitive {
             shape: Shape::Triangle(Triangle::new(t[0], t[1], t[2])),
@@ -174,6 +175,9 @@ pub fn run(dir: &Path, skip_1m: bool) -> Result<()> {
         "workload\ttriangles\trays\tbuild_ms\tns_per_ray_1t\tns_per_ray_2t\tbvh_bytes_per_triangle\thit_fraction\n",
     );
     print!("{lines}");
+    let mut obvhs_lines = String::from(
+        "workload\tbuild_ms\tns_per_ray_1t\tns_per_ray_2t\tf64_leaves_ns_per_ray_1t\tf64_leaves_ns_per_ray_2t\tbytes_per_triangle\trays_hit_or_miss_differently\tf64_leaves_rays_other_t\n",
+    );
     for w in &workloads {
         let prims = primitives(&w.tris);
         let bvh = (0..REPEATS)
@@ -203,7 +207,24 @@ pub fn run(dir: &Path, skip_1m: bool) -> Result<()> {
         );
         print!("{line}");
         lines.push_str(&line);
+        let o = obvhs_side::measure(&w.tris, &w.rays, &ts)?;
+        obvhs_lines.push_str(&format!(
+            "{}\t{:.1}\t{:.1}\t{:.1}\t{:.1}\t{:.1}\t{:.1}\t{}\t{}\n",
+            w.name,
+            o.build_ms,
+            o.ns_1t,
+            o.ns_2t,
+            o.exact_ns_1t,
+            o.exact_ns_2t,
+            o.bytes_per_triangle,
+            o.disagree,
+            o.exact_differ,
+        ));
     }
     std::fs::write(&table, lines).with_context(|| table.display().to_string())?;
+    // obvhs after ptui's table, so the Embree script's input is written whatever obvhs does.
+    print!("\nobvhs (CWBVH, medium build): f32 with its own triangle test, and with ptui's f64 test\n{obvhs_lines}");
+    let table = dir.join("obvhs.tsv");
+    std::fs::write(&table, obvhs_lines).with_context(|| table.display().to_string())?;
     Ok(())
 }

@@ -11,6 +11,7 @@ mod error_breakdown;
 mod export_mesh;
 mod gen_extreme;
 mod gen_spheres_field;
+mod obvhs_side;
 mod probe_limits;
 mod sky_map;
 mod smallpt;
