@@ -97,9 +97,9 @@ def main():
     print(
         "| workload | triangles | rays | ptui ns/ray 1t | Embree ns/ray 1t | ratio | "
         "ptui ns/ray 2t | Embree ns/ray 2t | ratio | ptui build ms | Embree build ms | ratio | "
-        "ptui BVH bytes/tri | hits agree |"
+        "ptui BVH bytes/tri | hits agree | ptui t+prim 1t | ratio | ptui t+prim 2t | ratio |"
     )
-    print("|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|")
+    print("|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|")
     for name, row in ptui.items():
         path = d / f"{name}.bin"
         tris, rays, ts = load(path)
@@ -116,10 +116,14 @@ def main():
         hit = out["geomID"] >= 0
         agree = float(np.mean(hit == np.isfinite(ts)))
         p1, p2, pb = float(row["ns_per_ray_1t"]), float(row["ns_per_ray_2t"]), float(row["build_ms"])
+        # ptui's query without its hit record (point, normal, error bound): distance and
+        # primitive, as Embree's rtcIntersect1 answers.
+        c1, c2 = float(row["closest_ns_per_ray_1t"]), float(row["closest_ns_per_ray_2t"])
         print(
             f"| {name} | {len(tris)} | {len(o)} | {p1:.0f} | {one:.0f} | {p1 / one:.2f} | "
             f"{p2:.0f} | {two:.0f} | {p2 / two:.2f} | {pb:.1f} | {build_s * 1e3:.1f} | "
-            f"{pb / (build_s * 1e3):.2f} | {float(row['bvh_bytes_per_triangle']):.0f} | {agree:.4f} |",
+            f"{pb / (build_s * 1e3):.2f} | {float(row['bvh_bytes_per_triangle']):.0f} | {agree:.4f} | "
+            f"{c1:.0f} | {c1 / one:.2f} | {c2:.0f} | {c2 / two:.2f} |",
             flush=True,
         )
 

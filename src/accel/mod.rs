@@ -120,7 +120,7 @@ impl Accel {
     pub fn closest_prim(&self, prims: &[Primitive], ray: &Ray, t_max: f64) -> Option<u32> {
         match self {
             Accel::Flat(f) => f.closest(prims, ray, t_max).map(|(_, i)| i),
-            Accel::Bvh(b) => b.intersect(prims, ray, t_max).map(|h| h.prim),
+            Accel::Bvh(b) => b.closest(ray, t_max).map(|(_, i)| i),
         }
     }
 
@@ -135,9 +135,9 @@ impl Accel {
                 batch.prim.clear();
                 for i in 0..batch.len() {
                     let t_max = batch.t_max(i);
-                    let hit = b.intersect(prims, &batch.ray(i), t_max);
-                    batch.t.push(hit.map_or(t_max, |h| h.t));
-                    batch.prim.push(hit.map_or(u32::MAX, |h| h.prim));
+                    let hit = b.closest(&batch.ray(i), t_max);
+                    batch.t.push(hit.map_or(t_max, |(t, _)| t));
+                    batch.prim.push(hit.map_or(u32::MAX, |(_, i)| i));
                 }
             }
         }
