@@ -20,7 +20,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// Timings are the best of this many runs (the minimum sheds other processes' interference).
-const REPEATS: usize = 5;
+pub(crate) const REPEATS: usize = 5;
 
 pub(crate) struct Workload {
     pub(crate) name: String,
@@ -114,7 +114,7 @@ pub(crate) fn primitives(tris: &[[DVec3; 3]]) -> Vec<Primitive> {
 
 /// Best wall time per ray over `rays`, split over `threads` threads, of `query` (which says
 /// whether the ray hit).
-fn ns_per_ray(rays: &[Ray], threads: usize, query: impl Fn(&Ray) -> bool + Sync) -> f64 {
+pub(crate) fn ns_per_ray(rays: &[Ray], threads: usize, query: impl Fn(&Ray) -> bool + Sync) -> f64 {
     let chunk = rays.len().div_ceil(threads);
     let mut best = f64::INFINITY;
     for _ in 0..REPEATS {

@@ -11,6 +11,7 @@
 //!
 //! Its build is `medium_build`, which obvhs describes as about Embree's build time.
 
+use crate::embree_workloads::{ns_per_ray, REPEATS};
 use anyhow::Result;
 use glam33::Vec3A;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
@@ -20,11 +21,7 @@ use obvhs::triangle::Triangle as OTri;
 use obvhs::BvhBuildParams;
 use ptui::geometry::Triangle;
 use ptui::math::{DVec3, Ray};
-use std::hint::black_box;
 use std::time::{Duration, Instant};
-
-/// Builds and timing runs: best of this many (as for ptui and Embree).
-const REPEATS: usize = 5;
 
 pub struct Figures {
     pub build_ms: f64,
@@ -49,24 +46,6 @@ fn v(p: DVec3) -> Vec3A {
 /// a bounce starts on the surface it leaves, which f32 would hit again).
 fn ray_f32(r: &Ray, t_min: f32) -> ORay {
     ORay::new(v(r.o), v(r.d), t_min, f32::INFINITY)
-}
-
-/// Best wall time per ray, the rays split over `threads` threads; `trace` returns whether a ray
-/// hit.
-fn time(rays: &[Ray], threads: usize, trace: impl Fn(&Ray) -> bool + Sync) -> f64 {
-    let chunk = rays.len().div_ceil(threads);
-    let mut best = f64::INFINITY;
-    for _ in 0..REPEATS {
-        let started = Instant::now();
-        std::thread::scope(|s| {
-            for part in rays.chunks(chunk) {
-                let trace = &trace;
-                s.spawn(move || black_box(part.iter().filter(|r| trace(r)).count()));
-            }
-        });
-        best = best.min(started.elapsed().as_secs_f64());
-    }
-    best * 1e9 / rays.len() as f64
 }
 
 /// Measure obvhs on one workload; `ts` are ptui's closest-hit distances (infinity for a miss).
@@ -151,10 +130,10 @@ pub fn measure(tris: &[[DVec3; 3]], rays: &[Ray], ts: &[f64]) -> Result<Figures>
         + bvh.primitive_indices.len() * (4 + std::mem::size_of::<OTri>());
     Ok(Figures {
         build_ms,
-        ns_1t: time(rays, 1, |r| fast(r).is_finite()),
-        ns_2t: time(rays, 2, |r| fast(r).is_finite()),
-        exact_ns_1t: time(rays, 1, |r| exact(r).is_finite()),
-        exact_ns_2t: time(rays, 2, |r| exact(r).is_finite()),
+        ns_1t: ns_per_ray(rays, 1, |r| fast(r).is_finite()),
+        ns_2t: ns_per_ray(rays, 2, |r| fast(r).is_finite()),
+        exact_ns_1t: ns_per_ray(rays, 1, |r| exact(r).is_finite()),
+        exact_ns_2t: ns_per_ray(rays, 2, |r| exact(r).is_finite()),
         bytes_per_triangle: bytes as f64 / tris.len() as f64,
         disagree,
         exact_differ,
