@@ -2,7 +2,8 @@
 //! (cross-field constraints, duplicate names), and choose the machinery this scene needs.
 
 use super::camera::{build_camera, focus_camera};
-use super::description::{MaterialDesc, MaterialName, MeshDesc, SceneDesc};
+use super::description::{MaterialDesc, MeshDesc, SceneDesc};
+use super::materials::build_material;
 use super::mesh::{self, Transform};
 use super::mesh_triangle_room;
 use super::sky::build_sky;
@@ -12,7 +13,7 @@ use crate::geometry::torus_knot::TorusKnot;
 use crate::geometry::{Primitive, Shape};
 use crate::geometry::{Sphere, Triangle};
 use crate::light::{sphere::SphereLight, triangle::TriangleLight, Light, Lights};
-use crate::material::{Material, MaterialKind};
+use crate::material::Material;
 use crate::math::DVec3;
 use crate::progress::Progress;
 use crate::settings::RenderSettings;
@@ -23,10 +24,6 @@ use std::sync::Arc;
 use std::time::Instant;
 use toml::Spanned;
 
-/// Default reflectance of an object that states none (and is not a light).
-const DEFAULT_COLOR: f64 = 0.75;
-/// Default index of refraction of glass.
-const DEFAULT_IOR: f64 = 1.5;
 /// Scene-build choices made outside the scene file.
 #[derive(Clone, Debug, Default)]
 pub struct BuildOptions {
@@ -147,7 +144,7 @@ impl Builder<'_> {
 
     /// Add shapes sharing material `material`; emissive ones become lights.
     fn add(&mut self, shapes: impl IntoIterator<Item = Shape>, material: u32) {
-        let m = self.materials[material as usize];
+        let m = &self.materials[material as usize];
         for shape in shapes {
             let prim = self.prims.len() as u32;
             let light = if m.is_emissive() {
@@ -294,6 +291,7 @@ fn build(
         );
     }
     let report = BuildReport {
+        materials: super::materials::describe(&materials),
         accel: format!("{} ({why})", accel.describe(prims.len())),
         light_sampling,
         environment: sky.text,
@@ -458,68 +456,6 @@ fn sidedness(lights: &Lights) -> String {
         ));
     }
     parts.join(", ")
-}
-
-fn build_material(
-    m: &MaterialDesc,
-    src: &str,
-    file: &str,
-    object: &str,
-    flat: bool,
-) -> Result<Material, SceneError> {
-    let kind_name = m.material.unwrap_or_default();
-    let emission = m.emission.map_or(DVec3::ZERO, |e| DVec3::from_array(e.0));
-    // Emitters do not reflect unless the scene gives them a colour.
-    let default_color = if emission.max_element() > 0.0 {
-        0.0
-    } else {
-        DEFAULT_COLOR
-    };
-    let color = m
-        .color
-        .map_or(DVec3::splat(default_color), |c| DVec3::from_array(c.0));
-    let kind = match kind_name {
-        MaterialName::Diffuse => MaterialKind::Diffuse,
-        MaterialName::Mirror => MaterialKind::Mirror,
-        MaterialName::Glass => MaterialKind::Glass {
-            ior: m.ior.as_ref().map_or(DEFAULT_IOR, |i| i.get_ref().0),
-        },
-    };
-    if let Some(two_sided) = &m.two_sided {
-        let problem = if !flat {
-            Some("`two_sided` applies to triangles, quads and meshes: a sphere emits outwards")
-        } else if emission.max_element() <= 0.0 {
-            Some("`two_sided` only applies to emitters (objects with an `emission`)")
-        } else {
-            None
-        };
-        if let Some(problem) = problem {
-            return Err(SceneError::at(
-                file,
-                src,
-                Some(two_sided.span()),
-                Some(format!("{object}.two_sided")),
-                problem,
-            ));
-        }
-    }
-    // Flat emitters emit from their front face alone unless asked, as in pbrt and Mitsuba.
-    let one_sided = flat && !m.two_sided.as_ref().is_some_and(|t| *t.get_ref());
-    if let (Some(ior), false) = (&m.ior, kind_name == MaterialName::Glass) {
-        return Err(SceneError::at(
-            file,
-            src,
-            Some(ior.span()),
-            Some(format!("{object}.ior")),
-            "`ior` only applies to material = \"glass\"",
-        ));
-    }
-    Ok(Material {
-        kind,
-        color,
-        emission,
-        one_sided,
-    })
 }
 
 /// A `[render]` size whose film cannot fit in the available memory is an error of the scene file,

@@ -6,6 +6,7 @@ mod camera;
 pub mod description;
 pub mod error;
 pub mod load;
+pub mod materials;
 pub mod mesh;
 pub mod obj;
 mod sky;
@@ -59,6 +60,8 @@ pub fn mesh_triangle_room(so_far: u64) -> (u64, String) {
 /// What the scene build chose, reported to the user.
 #[derive(Clone, Debug)]
 pub struct BuildReport {
+    /// The materials the objects use (`scene::materials::describe`).
+    pub materials: String,
     pub accel: String,
     pub light_sampling: String,
     /// What lights the scene from infinity, and how it is sampled.
@@ -72,8 +75,8 @@ impl std::fmt::Display for BuildReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "accel: {}; light sampling: {}; environment: {}",
-            self.accel, self.light_sampling, self.environment
+            "accel: {}; light sampling: {}; environment: {}; materials: {}",
+            self.accel, self.light_sampling, self.environment, self.materials
         )?;
         for w in &self.warnings {
             write!(f, "; warning: {w}")?;

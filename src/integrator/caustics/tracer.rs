@@ -81,6 +81,16 @@ impl CausticTracer {
         if scene.lights.is_empty() {
             return Err("none (no emitters)".into());
         }
+        if let Some(m) = scene.materials.iter().find(|m| !m.kind.is_smallpt()) {
+            // Its splats and joins assume diffuse, mirror and smooth glass vertices: a glossy
+            // one has neither a bounded BSDF for the joins' roulette nor a delta chain's
+            // bookkeeping. Glossy paths stay with the camera paths, which handle them by MIS.
+            return Err(format!(
+                "path-traced (the light tracer handles diffuse, mirror and glass; the scene \
+                 has {})",
+                m.kind.describe()
+            ));
+        }
         let mut targets = Vec::new();
         for p in &scene.prims {
             if !scene.materials[p.material as usize].is_delta() {
