@@ -18,7 +18,7 @@ use crate::render::adaptive::SampleMap;
 use crate::render::film::{Film, PixelState};
 use crate::render::RenderStats;
 use crate::sampling::SamplerKind;
-use crate::settings::{Caustics, IntegratorKind, RenderSettings, Tonemap};
+use crate::settings::{Caustics, IntegratorKind, RenderSettings, Strategy, Tonemap};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -135,6 +135,9 @@ pub struct FilmHeader {
     pub sampler: SamplerKind,
     pub integrator: IntegratorKind,
     pub caustics: Caustics,
+    /// Absent: `mis` (films written before the setting existed).
+    #[serde(default, skip_serializing_if = "is_mis")]
+    pub strategy: Strategy,
     /// Longest path in bounces; absent = unlimited.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_depth: Option<u32>,
@@ -189,6 +192,7 @@ impl FilmHeader {
             sampler: settings.sampler,
             integrator: settings.integrator,
             caustics: settings.caustics,
+            strategy: settings.strategy,
             max_depth: settings.max_depth,
             adaptive: settings.adaptive,
             painterly: settings.painterly.to_string(),
@@ -218,6 +222,7 @@ impl FilmHeader {
             ("sampler", self.sampler.name().to_string()),
             ("integrator", self.integrator.name().to_string()),
             ("caustics", self.caustics.name().to_string()),
+            ("strategy", self.strategy.name().to_string()),
             (
                 "max_depth",
                 self.max_depth
@@ -318,6 +323,10 @@ fn is_zero(v: &u32) -> bool {
     *v == 0
 }
 
+fn is_mis(s: &Strategy) -> bool {
+    *s == Strategy::Mis
+}
+
 impl FilmHeader {
     /// The settings layer that renders this film's image (for the TUI's request).
     pub fn overrides(&self) -> crate::settings::SettingsOverrides {
@@ -329,6 +338,7 @@ impl FilmHeader {
             sampler: Some(self.sampler),
             integrator: Some(self.integrator),
             caustics: Some(self.caustics),
+            strategy: Some(self.strategy),
             max_depth: self.max_depth,
             exposure: Some(self.exposure),
             tonemap: Some(self.tonemap),

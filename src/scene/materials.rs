@@ -256,7 +256,12 @@ fn conductor_fresnel(m: &MaterialDesc, at: &At) -> Result<ConductorFresnel, Scen
 pub fn describe(materials: &[Material]) -> String {
     let mut seen: Vec<(String, usize)> = Vec::new();
     for m in materials {
-        let d = m.kind.describe();
+        // A light that does not reflect is listed as what it is.
+        let d = if m.is_emissive() && m.color == DVec3::ZERO {
+            "emitter".to_string()
+        } else {
+            m.kind.describe()
+        };
         match seen.iter_mut().find(|(s, _)| *s == d) {
             Some((_, n)) => *n += 1,
             None => seen.push((d, 1)),

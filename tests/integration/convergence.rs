@@ -198,6 +198,7 @@ fn args(output: PathBuf) -> ConvergeArgs {
         size: None,
         integrator: vec![IntegratorKind::Path, IntegratorKind::Naive],
         sampler: vec![],
+        strategy: vec![],
         threads: None,
         seed: Some(3),
         max_depth: None,

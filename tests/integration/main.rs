@@ -7,6 +7,7 @@
 mod common;
 
 mod bad_input;
+mod bsdf_mitsuba;
 mod bvh;
 mod caustics;
 mod cli;
@@ -30,5 +31,6 @@ mod sampling_chi2;
 mod scene_errors;
 mod shard;
 mod smooth;
+mod strategies;
 mod tui_graphics;
 mod tui_preview;

@@ -65,6 +65,13 @@ impl CausticTracer {
         if settings.max_depth.is_some() {
             return Err("path-traced (a depth limit is set)".into());
         }
+        if settings.strategy != crate::settings::Strategy::Mis {
+            // Its joins are weighed against the camera paths by MIS.
+            return Err(format!(
+                "path-traced (strategy {}, not mis)",
+                settings.strategy.name()
+            ));
+        }
         let lens = scene
             .camera
             .with_lens_settings(settings.aperture, settings.focus_distance);
