@@ -203,6 +203,6 @@ fn painterly_sample(
         }
         MaterialKind::Mirror => material.sample(wo, nn, 0.0, (0.0, 0.0)),
         // Not painted ([`paints`]): their own sample is taken instead.
-        MaterialKind::Conductor(_) | MaterialKind::RoughGlass(_) | MaterialKind::Plastic(_) => None,
+        MaterialKind::Glossy(_) | MaterialKind::SmoothConductor(_) => None,
     }
 }

@@ -40,24 +40,23 @@ impl ConductorFresnel {
     }
 }
 
+/// The rough conductor (the smooth one is `Glossy::SmoothConductor`, a delta lobe).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Conductor {
-    /// None: smooth, a delta reflection.
-    pub distribution: Option<Distribution>,
+    pub distribution: Distribution,
     pub fresnel: ConductorFresnel,
 }
 
 impl Conductor {
-    /// The rough conductor's sample (the smooth one is a delta lobe, see `Material::sample`).
     #[inline]
     pub fn sample(
         &self,
-        d: &Distribution,
         color: DVec3,
         wo: DVec3,
         nn: Normals,
         u: (f64, f64),
     ) -> Option<BsdfSample> {
+        let d = &self.distribution;
         let frame = shading::opaque(wo, nn)?;
         let wo_l = frame.to_local(wo);
         if wo_l.z <= 0.0 {
@@ -89,14 +88,8 @@ impl Conductor {
 
     /// f cos and the pdf of the rough conductor.
     #[inline]
-    pub fn eval(
-        &self,
-        d: &Distribution,
-        color: DVec3,
-        wo: DVec3,
-        wi: DVec3,
-        nn: Normals,
-    ) -> BsdfEval {
+    pub fn eval(&self, color: DVec3, wo: DVec3, wi: DVec3, nn: Normals) -> BsdfEval {
+        let d = &self.distribution;
         let zero = BsdfEval::ZERO;
         let Some(frame) = shading::opaque(wo, nn) else {
             return zero;

@@ -38,21 +38,42 @@ use std::f64::consts::FRAC_1_PI;
 /// its rough materials' alpha. Tested in `tests/integration/materials.rs`.
 pub const SPECULAR_ALPHA: f64 = 1e-4;
 
+/// The materials. smallpt's three come first and small; every later one is behind the one
+/// pointer of [`MaterialKind::Glossy`], so that matching the three stays the one compare it was
+/// and their code stays as small: with the microfacet materials as variants of their own the
+/// hot loop of `cornell` ran 9% more instructions (benches/HISTORY.md#materials).
 #[derive(Clone, Debug, PartialEq)]
 pub enum MaterialKind {
     /// Lambertian reflection.
     Diffuse,
+    /// A rough metal, rough glass or plastic (smooth or rough).
+    Glossy(Box<Glossy>),
     /// Perfect specular reflection.
     Mirror,
     /// Smooth dielectric with exact Fresnel: reflection, refraction, total internal reflection.
     /// `ior` is the inside index over the outside one (the outside is vacuum).
     Glass { ior: f64 },
-    /// A metal: smooth (a delta reflection with the conductor's Fresnel) or rough.
+    /// A smooth metal: the mirror's delta reflection with the conductor's Fresnel reflectance.
+    /// The delta materials come last, so that [`Material::is_delta`] is one compare.
+    SmoothConductor(Box<ConductorFresnel>),
+}
+
+/// The materials beyond smallpt's.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Glossy {
+    /// A rough metal.
     Conductor(Conductor),
     /// Glass with a rough surface.
     RoughGlass(RoughDielectric),
     /// A diffuse base under a smooth or rough dielectric coat.
     Plastic(Plastic),
+}
+
+impl Glossy {
+    /// Boxed as a [`MaterialKind`].
+    pub fn kind(self) -> MaterialKind {
+        MaterialKind::Glossy(Box::new(self))
+    }
 }
 
 impl MaterialKind {
@@ -74,16 +95,14 @@ impl MaterialKind {
             MaterialKind::Diffuse => "diffuse".into(),
             MaterialKind::Mirror => "mirror".into(),
             MaterialKind::Glass { .. } => "glass".into(),
-            MaterialKind::RoughGlass(g) => format!("glass{}", alpha(&g.distribution)),
-            MaterialKind::Conductor(c) => {
-                format!(
-                    "conductor{}",
-                    c.distribution.as_ref().map_or(String::new(), alpha)
-                )
-            }
-            MaterialKind::Plastic(p) => {
-                format!("plastic{}", p.distribution().map_or(String::new(), alpha))
-            }
+            MaterialKind::SmoothConductor(_) => "conductor".into(),
+            MaterialKind::Glossy(g) => match g.as_ref() {
+                Glossy::RoughGlass(g) => format!("glass{}", alpha(&g.distribution)),
+                Glossy::Conductor(c) => format!("conductor{}", alpha(&c.distribution)),
+                Glossy::Plastic(p) => {
+                    format!("plastic{}", p.distribution().map_or(String::new(), alpha))
+                }
+            },
         }
     }
 
@@ -166,11 +185,10 @@ impl Material {
 
     /// True when every lobe is a delta: next-event estimation is useless here.
     pub fn is_delta(&self) -> bool {
-        match &self.kind {
-            MaterialKind::Diffuse | MaterialKind::RoughGlass(_) | MaterialKind::Plastic(_) => false,
-            MaterialKind::Mirror | MaterialKind::Glass { .. } => true,
-            MaterialKind::Conductor(c) => c.distribution.is_none(),
-        }
+        matches!(
+            self.kind,
+            MaterialKind::Mirror | MaterialKind::Glass { .. } | MaterialKind::SmoothConductor(_)
+        )
     }
 
     /// Which of [`Material::sample`]'s random numbers it reads: (`u_lobe`, `u`). The integrators
@@ -181,8 +199,11 @@ impl Material {
             MaterialKind::Diffuse => (false, true),
             MaterialKind::Mirror => (false, false),
             MaterialKind::Glass { .. } => (true, false),
-            MaterialKind::Conductor(c) => (false, c.distribution.is_some()),
-            MaterialKind::RoughGlass(_) | MaterialKind::Plastic(_) => (true, true),
+            MaterialKind::SmoothConductor(_) => (false, false),
+            MaterialKind::Glossy(g) => match g.as_ref() {
+                Glossy::Conductor(_) => (false, true),
+                Glossy::RoughGlass(_) | Glossy::Plastic(_) => (true, true),
+            },
         }
     }
 
@@ -267,22 +288,45 @@ impl Material {
                     })
                 }
             }
-            MaterialKind::Conductor(c) => match &c.distribution {
-                Some(d) => c.sample(d, self.color, wo, nn, u),
-                None => {
-                    // The mirror's direction, weighted by the conductor's Fresnel there.
-                    let (wi, normal) = mirror_direction(wo, nn, cos_o);
-                    Some(BsdfSample {
-                        wi,
-                        weight: self.color * c.fresnel.reflectance(wo.dot(normal).abs()),
-                        pdf: 1.0,
-                        delta: true,
-                        eta_scale: 1.0,
-                    })
-                }
-            },
-            MaterialKind::RoughGlass(g) => g.sample(self.color, wo, nn, u_lobe, u),
-            MaterialKind::Plastic(p) => p.sample(self.color, wo, nn, u_lobe, u),
+            MaterialKind::Glossy(g) => self.sample_glossy(g, wo, nn, u_lobe, u),
+            MaterialKind::SmoothConductor(fresnel) => self.sample_smooth_conductor(fresnel, wo, nn),
+        }
+    }
+
+    /// The smooth conductor's delta lobe: the mirror's direction, weighted by the conductor's
+    /// Fresnel reflectance there. Out of line as [`Material::sample_glossy`].
+    #[inline(never)]
+    fn sample_smooth_conductor(
+        &self,
+        fresnel: &ConductorFresnel,
+        wo: DVec3,
+        nn: Normals,
+    ) -> Option<BsdfSample> {
+        let (wi, normal) = mirror_direction(wo, nn, wo.dot(nn.g));
+        Some(BsdfSample {
+            wi,
+            weight: self.color * fresnel.reflectance(wo.dot(normal).abs()),
+            pdf: 1.0,
+            delta: true,
+            eta_scale: 1.0,
+        })
+    }
+
+    /// [`Material::sample`] of the materials after smallpt's, kept out of line so that the
+    /// smallpt materials' inlined code stays as small as it was (benches/HISTORY.md#materials).
+    #[inline(never)]
+    fn sample_glossy(
+        &self,
+        g: &Glossy,
+        wo: DVec3,
+        nn: Normals,
+        u_lobe: f64,
+        u: (f64, f64),
+    ) -> Option<BsdfSample> {
+        match g {
+            Glossy::Conductor(c) => c.sample(self.color, wo, nn, u),
+            Glossy::RoughGlass(g) => g.sample(self.color, wo, nn, u_lobe, u),
+            Glossy::Plastic(p) => p.sample(self.color, wo, nn, u_lobe, u),
         }
     }
 
@@ -342,14 +386,14 @@ impl Material {
     /// the rounding of the cosine (a unit vector's dot product with itself can be 1 + 1 ulp).
     #[inline]
     pub fn f_cos_bound(&self) -> DVec3 {
-        match self.kind {
+        match &self.kind {
             MaterialKind::Diffuse => self.color * FRAC_1_PI,
-            MaterialKind::Mirror | MaterialKind::Glass { .. } => DVec3::ZERO,
+            MaterialKind::Mirror
+            | MaterialKind::Glass { .. }
+            | MaterialKind::SmoothConductor(_) => DVec3::ZERO,
             // Unbounded (a microfacet peak grows as 1 / alpha^2); the light tracer that reads
             // the bound is not built with these materials.
-            MaterialKind::Conductor(_) | MaterialKind::RoughGlass(_) | MaterialKind::Plastic(_) => {
-                DVec3::splat(f64::INFINITY)
-            }
+            MaterialKind::Glossy(_) => DVec3::splat(f64::INFINITY),
         }
     }
 
@@ -359,7 +403,7 @@ impl Material {
     /// normal's (turned to that side), clamped at 0 where `wi` falls behind it, which is where
     /// [`Material::sample`]'s pdf is 0 too. f itself stays color / pi for any `wo` on the side,
     /// so a `wo` behind the shading normal (silhouettes, grazing views) is still lit.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wo: DVec3, wi: DVec3, nn: Normals) -> BsdfEval {
         match &self.kind {
             MaterialKind::Diffuse => {
@@ -382,13 +426,20 @@ impl Material {
                     pdf: cos * FRAC_1_PI,
                 }
             }
-            MaterialKind::Conductor(c) => match &c.distribution {
-                Some(d) => c.eval(d, self.color, wo, wi, nn),
-                None => BsdfEval::ZERO,
-            },
-            MaterialKind::RoughGlass(g) => g.eval(self.color, wo, wi, nn),
-            MaterialKind::Plastic(p) => p.eval(self.color, wo, wi, nn),
-            MaterialKind::Mirror | MaterialKind::Glass { .. } => BsdfEval::ZERO,
+            MaterialKind::Mirror
+            | MaterialKind::Glass { .. }
+            | MaterialKind::SmoothConductor(_) => BsdfEval::ZERO,
+            MaterialKind::Glossy(g) => self.eval_glossy(g, wo, wi, nn),
+        }
+    }
+
+    /// [`Material::eval`] of the glossy materials, out of line as [`Material::sample_glossy`].
+    #[inline(never)]
+    fn eval_glossy(&self, g: &Glossy, wo: DVec3, wi: DVec3, nn: Normals) -> BsdfEval {
+        match g {
+            Glossy::Conductor(c) => c.eval(self.color, wo, wi, nn),
+            Glossy::RoughGlass(g) => g.eval(self.color, wo, wi, nn),
+            Glossy::Plastic(p) => p.eval(self.color, wo, wi, nn),
         }
     }
 }

@@ -131,6 +131,7 @@ impl Plastic {
         color * (self.inv_eta2 * t_o * t_i * FRAC_1_PI / (1.0 - self.internal_reflectance))
     }
 
+    #[inline]
     pub fn sample(
         &self,
         color: DVec3,
@@ -187,6 +188,7 @@ impl Plastic {
         })
     }
 
+    #[inline]
     pub fn eval(&self, color: DVec3, wo: DVec3, wi: DVec3, nn: Normals) -> BsdfEval {
         let zero = BsdfEval::ZERO;
         let Some(frame) = shading::opaque(wo, nn) else {

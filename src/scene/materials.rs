@@ -15,8 +15,8 @@
 use super::description::{DistributionName, MaterialDesc, MaterialName};
 use super::SceneError;
 use crate::material::{
-    metals, ConductorFresnel, Distribution, Material, MaterialKind, Microfacet, RoughDielectric,
-    SPECULAR_ALPHA,
+    metals, ConductorFresnel, Distribution, Glossy, Material, MaterialKind, Microfacet,
+    RoughDielectric, SPECULAR_ALPHA,
 };
 use crate::math::DVec3;
 use std::ops::Range;
@@ -124,27 +124,36 @@ pub fn build_material(
             None => MaterialKind::Glass {
                 ior: ior(DEFAULT_IOR),
             },
-            Some(distribution) => MaterialKind::RoughGlass(RoughDielectric {
+            Some(distribution) => Glossy::RoughGlass(RoughDielectric {
                 distribution,
                 ior: ior(DEFAULT_IOR),
-            }),
+            })
+            .kind(),
         },
-        Conductor => MaterialKind::Conductor(crate::material::Conductor {
-            distribution,
-            fresnel: conductor_fresnel(m, &at)?,
-        }),
+        Conductor => {
+            let fresnel = conductor_fresnel(m, &at)?;
+            match distribution {
+                None => MaterialKind::SmoothConductor(Box::new(fresnel)),
+                Some(distribution) => Glossy::Conductor(crate::material::Conductor {
+                    distribution,
+                    fresnel,
+                })
+                .kind(),
+            }
+        }
         Plastic => {
             let specular = m
                 .specular
                 .as_ref()
                 .map_or(DVec3::ONE, |s| DVec3::from_array(s.get_ref().0));
             let mean = color.element_sum() / 3.0;
-            MaterialKind::Plastic(crate::material::Plastic::new(
+            Glossy::Plastic(crate::material::Plastic::new(
                 ior(DEFAULT_PLASTIC_IOR),
                 specular,
                 mean,
                 distribution,
             ))
+            .kind()
         }
     };
     if let Some(two_sided) = &m.two_sided {
