@@ -527,6 +527,9 @@ fn draw_details(frame: &mut Frame, app: &App, area: Rect) {
     if !app.notes.environment.is_empty() && app.notes.environment != "black" {
         rows.push(("sky", app.notes.environment.clone()));
     }
+    if !app.notes.materials.is_empty() {
+        rows.push(("materials", app.notes.materials.clone()));
+    }
     let colours = match (app.color_mode, app.form.color) {
         (super::color::ColorMode::Truecolor, _) => "truecolor".to_string(),
         (_, super::color::ColorChoice::Auto) => COLOR_HINTS[0].to_string(),
@@ -597,6 +600,7 @@ mod tests {
                        of a pilot's paths reached the camera)"
                 .into(),
             environment: "black".into(),
+            materials: "diffuse x6, mirror, glass, emitter".into(),
             build_time: Duration::from_micros(400),
         }
     }
@@ -828,6 +832,7 @@ mod tests {
             caustics: String::new(),
             environment: "map builtin:sky (512x256), importance-sampled, MIS with BSDF sampling"
                 .into(),
+            materials: String::new(),
             build_time: Duration::ZERO,
         };
         assert_eq!(bvh.short(), "BVH, 1200 objects · none · sky map");
