@@ -13,6 +13,7 @@ pub mod camera;
 pub mod checked;
 pub mod cli;
 pub mod cpu;
+pub mod files;
 pub mod geometry;
 pub mod integrator;
 pub mod io;
@@ -25,6 +26,7 @@ pub mod sampling;
 pub mod scene;
 pub mod session;
 pub mod settings;
+pub mod texture;
 pub mod tui;
 
 #[cfg(test)]

@@ -205,6 +205,20 @@ impl Triangle {
         Aabb::EMPTY.grow(p0).grow(p1).grow(p2)
     }
 
+    /// The barycentrics (b1, b2) of p1 and p2 at a point `x` on the triangle (for a point off
+    /// it, those of its projection onto the plane); (0, 0) for a degenerate triangle.
+    pub fn barycentrics(&self, x: DVec3) -> (f64, f64) {
+        let [p0, p1, p2] = self.p();
+        let c = self.cross();
+        let den = c.length_squared();
+        if !(den > 0.0 && den.is_finite()) {
+            return (0.0, 0.0);
+        }
+        let b1 = (x - p0).cross(p2 - p0).dot(c) / den;
+        let b2 = (p1 - p0).cross(x - p0).dot(c) / den;
+        (b1, b2)
+    }
+
     /// The point with barycentrics (1 - b1 - b2, b1, b2).
     pub fn point(&self, b1: f64, b2: f64) -> DVec3 {
         let [p0, p1, p2] = self.p();
@@ -220,6 +234,20 @@ mod tests {
 
     fn unit() -> Triangle {
         Triangle::new(DVec3::ZERO, DVec3::X, DVec3::Y)
+    }
+
+    #[test]
+    fn barycentrics_invert_point() {
+        let t = Triangle::new(
+            DVec3::new(1.0, 2.0, 3.0),
+            DVec3::new(4.0, -1.0, 0.5),
+            DVec3::new(-2.0, 0.0, 1.0),
+        );
+        let (b1, b2) = t.barycentrics(t.point(0.3, 0.25));
+        assert!(
+            (b1 - 0.3).abs() < 1e-12 && (b2 - 0.25).abs() < 1e-12,
+            "{b1} {b2}"
+        );
     }
 
     #[test]

@@ -145,6 +145,10 @@ pub(crate) fn light_shadow(
     if e.f_cos.max_element() <= 0.0 || ls.pdf <= 0.0 {
         return None;
     }
+    let le = match &scene.textures {
+        None => ls.le,
+        Some(t) => textured_emission(scene, t, &ls, hit),
+    };
     let w = if mis {
         power_heuristic(ls.pdf, e.pdf)
     } else {
@@ -154,8 +158,21 @@ pub(crate) fn light_shadow(
         ray: shadow_ray(scene, hit, &ls),
         t_max: f64::INFINITY,
         target: Some(ls.prim),
-        value: beta * (e.f_cos * ls.le * (w / ls.pdf)),
+        value: beta * (e.f_cos * le * (w / ls.pdf)),
     })
+}
+
+/// The radiance a light sample receives from a light whose emission may be textured: looked up
+/// at the point sampled (triangles find theirs; textured emitters are never spheres).
+#[inline(never)]
+fn textured_emission(
+    scene: &Scene,
+    t: &crate::scene::textures::SceneTextures,
+    ls: &LightSample,
+    hit: &Hit,
+) -> DVec3 {
+    let x = ls.point.unwrap_or(hit.p + ls.wi);
+    t.emission_at(scene, ls.prim, x).unwrap_or(ls.le)
 }
 
 /// The shadow ray of a light sample: from the offset origin towards the point on the light that

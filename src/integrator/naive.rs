@@ -50,7 +50,8 @@ impl NaivePath {
             self.l += self.beta * scene.sky(self.ray.d);
             return false;
         };
-        let material = scene.material(hit);
+        let mut textured = None;
+        let material = scene.material_at(hit, &mut textured);
         self.l += self.beta * material.emitted(hit.n, self.ray.d);
         if self.depth >= max_depth {
             return false;

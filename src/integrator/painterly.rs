@@ -77,7 +77,8 @@ pub fn radiance(
             }
             break;
         };
-        let material = scene.material(&hit);
+        let mut textured = None;
+        let material = scene.material_at(&hit, &mut textured);
         let prim = &scene.prims[hit.prim as usize];
 
         if material.is_emissive() && material.emits_towards(hit.n, ray.d) {

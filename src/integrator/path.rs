@@ -232,12 +232,14 @@ impl PathState {
             self.miss(scene, strategy);
             return false;
         };
-        if !self.arrive(scene, hit, max_depth, caustics, strategy) {
+        let mut textured = None;
+        let material = scene.material_at(hit, &mut textured);
+        if !self.arrive(scene, hit, material, max_depth, caustics, strategy) {
             return false;
         }
-        shadows.light = self.light(scene, hit, sampler, strategy);
-        shadows.join = self.join(scene, hit, sampler, caustics);
-        self.leave(scene, hit, sampler, caustics)
+        shadows.light = self.light(scene, hit, material, sampler, strategy);
+        shadows.join = self.join(scene, hit, material, sampler, caustics);
+        self.leave(hit, material, sampler, caustics)
     }
 
     /// The path left the scene: the background's radiance, or the environment map's weighted
@@ -263,10 +265,12 @@ impl PathState {
     /// The first phase at a hit: its emission and the bookkeeping of delta chains. Returns
     /// whether the path scatters here (it ends at `max_depth`).
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn arrive(
         &mut self,
         scene: &Scene,
         hit: &Hit,
+        material: &Material,
         max_depth: u32,
         caustics: Option<CausticPass>,
         strategy: Strategy,
@@ -274,7 +278,6 @@ impl PathState {
         let ray = self.ray;
         let nee = scene.has_lights() && strategy != Strategy::Bsdf;
         let connect = joinable(caustics);
-        let material = scene.material(hit);
         let prim = &scene.prims[hit.prim as usize];
 
         let covered = self.delta_run > 0
@@ -340,10 +343,10 @@ impl PathState {
         &self,
         scene: &Scene,
         hit: &Hit,
+        material: &Material,
         sampler: &mut Sampler,
         strategy: Strategy,
     ) -> Option<Shadow> {
-        let material = scene.material(hit);
         if !scene.has_lights() {
             return None;
         }
@@ -363,12 +366,12 @@ impl PathState {
         &mut self,
         scene: &Scene,
         hit: &Hit,
+        material: &Material,
         sampler: &mut Sampler,
         caustics: Option<CausticPass>,
     ) -> Option<Shadow> {
         let join = self.next_join.take();
         let c = joinable(caustics)?;
-        let material = scene.material(hit);
         let here = !material.is_delta();
         // Small passes: the end is picked here, its number drawn in this vertex's turn.
         let join = if c.tracer.large_passes() {
@@ -390,12 +393,11 @@ impl PathState {
     #[inline(always)]
     fn leave(
         &mut self,
-        scene: &Scene,
         hit: &Hit,
+        material: &Material,
         sampler: &mut Sampler,
         caustics: Option<CausticPass>,
     ) -> bool {
-        let material = scene.material(hit);
         let wo = -self.ray.d;
         let Some(bs) = sample_bsdf(material, hit, wo, sampler) else {
             return false;

@@ -16,6 +16,7 @@
 pub mod conductor;
 pub mod dielectric;
 pub mod fresnel;
+pub mod metallic_roughness;
 pub mod metals;
 pub mod microfacet;
 pub mod plastic;
@@ -23,6 +24,7 @@ pub mod shading;
 
 pub use conductor::{Conductor, ConductorFresnel};
 pub use dielectric::RoughDielectric;
+pub use metallic_roughness::MetallicRoughness;
 pub use microfacet::{Distribution, Microfacet};
 pub use plastic::Plastic;
 
@@ -67,6 +69,8 @@ pub enum Glossy {
     RoughGlass(RoughDielectric),
     /// A diffuse base under a smooth or rough dielectric coat.
     Plastic(Plastic),
+    /// glTF's metallic-roughness material.
+    MetallicRoughness(MetallicRoughness),
 }
 
 impl Glossy {
@@ -102,7 +106,39 @@ impl MaterialKind {
                 Glossy::Plastic(p) => {
                     format!("plastic{}", p.distribution().map_or(String::new(), alpha))
                 }
+                Glossy::MetallicRoughness(m) => format!(
+                    "metallic-roughness (metallic {}{})",
+                    m.metallic,
+                    alpha(&m.distribution).replace(" (", ", ").replace(')', "")
+                ),
             },
+        }
+    }
+
+    /// A textured surface's roughness (`alpha`, Mitsuba's; at least [`SPECULAR_ALPHA`]) and
+    /// metalness at one point, where this material has them: the rough conductor and glass
+    /// and the metallic-roughness material (a plastic's coat tables are computed for one
+    /// alpha at scene build, so the scene refuses an `alpha` texture there).
+    pub fn set_parameters(&mut self, alpha: Option<f64>, metallic: Option<f64>) {
+        let MaterialKind::Glossy(g) = self else {
+            return;
+        };
+        let set = |d: &mut Distribution| {
+            if let Some(a) = alpha {
+                let a = a.max(SPECULAR_ALPHA);
+                (d.alpha_u, d.alpha_v) = (a, a);
+            }
+        };
+        match g.as_mut() {
+            Glossy::Conductor(c) => set(&mut c.distribution),
+            Glossy::RoughGlass(g) => set(&mut g.distribution),
+            Glossy::MetallicRoughness(m) => {
+                set(&mut m.distribution);
+                if let Some(x) = metallic {
+                    m.metallic = x;
+                }
+            }
+            Glossy::Plastic(_) => {}
         }
     }
 
@@ -202,7 +238,9 @@ impl Material {
             MaterialKind::SmoothConductor(_) => (false, false),
             MaterialKind::Glossy(g) => match g.as_ref() {
                 Glossy::Conductor(_) => (false, true),
-                Glossy::RoughGlass(_) | Glossy::Plastic(_) => (true, true),
+                Glossy::RoughGlass(_) | Glossy::Plastic(_) | Glossy::MetallicRoughness(_) => {
+                    (true, true)
+                }
             },
         }
     }
@@ -327,6 +365,7 @@ impl Material {
             Glossy::Conductor(c) => c.sample(self.color, wo, nn, u),
             Glossy::RoughGlass(g) => g.sample(self.color, wo, nn, u_lobe, u),
             Glossy::Plastic(p) => p.sample(self.color, wo, nn, u_lobe, u),
+            Glossy::MetallicRoughness(m) => m.sample(self.color, wo, nn, u_lobe, u),
         }
     }
 
@@ -440,6 +479,7 @@ impl Material {
             Glossy::Conductor(c) => c.eval(self.color, wo, wi, nn),
             Glossy::RoughGlass(g) => g.eval(self.color, wo, wi, nn),
             Glossy::Plastic(p) => p.eval(self.color, wo, wi, nn),
+            Glossy::MetallicRoughness(m) => m.eval(self.color, wo, wi, nn),
         }
     }
 }

@@ -40,7 +40,9 @@ pub use crate::checked::{
     MIN_MAGNITUDE, V3,
 };
 use crate::settings::SettingsOverrides;
+use serde::de::{self, Deserializer, IntoDeserializer, Visitor};
 use serde::Deserialize;
+use std::marker::PhantomData;
 use toml::Spanned;
 
 #[derive(Debug, Default, Deserialize)]
@@ -107,6 +109,8 @@ pub enum MaterialName {
     Conductor,
     /// A diffuse base under a dielectric coat (`material::plastic`).
     Plastic,
+    /// glTF's material (`material::metallic_roughness`).
+    MetallicRoughness,
 }
 
 impl MaterialName {
@@ -117,6 +121,7 @@ impl MaterialName {
             MaterialName::Glass => "glass",
             MaterialName::Conductor => "conductor",
             MaterialName::Plastic => "plastic",
+            MaterialName::MetallicRoughness => "metallic-roughness",
         }
     }
 }
@@ -134,11 +139,11 @@ pub enum DistributionName {
 #[derive(Debug, Default, Clone)]
 pub struct MaterialDesc {
     pub material: Option<MaterialName>,
-    pub color: Option<Albedo>,
-    pub emission: Option<Rgb>,
+    pub color: Option<Spanned<Textured<Albedo>>>,
+    pub emission: Option<Spanned<Textured<Rgb>>>,
     pub ior: Option<Spanned<Ior>>,
     pub two_sided: Option<Spanned<bool>>,
-    pub alpha: Option<Spanned<Roughness>>,
+    pub alpha: Option<Spanned<Textured<Roughness>>>,
     pub alpha_u: Option<Spanned<Roughness>>,
     pub alpha_v: Option<Spanned<Roughness>>,
     pub distribution: Option<Spanned<DistributionName>>,
@@ -146,11 +151,12 @@ pub struct MaterialDesc {
     pub k: Option<Spanned<Rgb>>,
     pub metal: Option<Spanned<String>>,
     pub specular: Option<Spanned<Albedo>>,
+    pub metallic: Option<Spanned<Textured<Unit>>>,
 }
 
 /// Declares an object table: its own fields, then the material keys every object carries
 /// (`material`, `color`, `emission`, `ior`, `two_sided`, `alpha`, `alpha_u`, `alpha_v`,
-/// `distribution`, `eta`, `k`, `metal`, `specular`; see `material`), and `material()`, which
+/// `distribution`, `eta`, `k`, `metal`, `specular`, `metallic`; see `material`), and `material()`, which
 /// gathers the latter into a [`MaterialDesc`].
 macro_rules! object_desc {
     ($(#[$meta:meta])* pub struct $name:ident { $($(#[$fmeta:meta])* pub $field:ident: $ty:ty,)* }) => {
@@ -160,12 +166,12 @@ macro_rules! object_desc {
         pub struct $name {
             $($(#[$fmeta])* pub $field: $ty,)*
             pub material: Option<MaterialName>,
-            pub color: Option<Albedo>,
-            pub emission: Option<Rgb>,
+            pub color: Option<Spanned<Textured<Albedo>>>,
+            pub emission: Option<Spanned<Textured<Rgb>>>,
             pub ior: Option<Spanned<Ior>>,
             /// Emitters only: whether both faces emit (default: the front face alone).
             pub two_sided: Option<Spanned<bool>>,
-            pub alpha: Option<Spanned<Roughness>>,
+            pub alpha: Option<Spanned<Textured<Roughness>>>,
             pub alpha_u: Option<Spanned<Roughness>>,
             pub alpha_v: Option<Spanned<Roughness>>,
             pub distribution: Option<Spanned<DistributionName>>,
@@ -173,14 +179,15 @@ macro_rules! object_desc {
             pub k: Option<Spanned<Rgb>>,
             pub metal: Option<Spanned<String>>,
             pub specular: Option<Spanned<Albedo>>,
+            pub metallic: Option<Spanned<Textured<Unit>>>,
         }
 
         impl $name {
             pub fn material(&self) -> MaterialDesc {
                 MaterialDesc {
                     material: self.material,
-                    color: self.color,
-                    emission: self.emission,
+                    color: self.color.clone(),
+                    emission: self.emission.clone(),
                     ior: self.ior.clone(),
                     two_sided: self.two_sided.clone(),
                     alpha: self.alpha.clone(),
@@ -191,6 +198,7 @@ macro_rules! object_desc {
                     k: self.k.clone(),
                     metal: self.metal.clone(),
                     specular: self.specular.clone(),
+                    metallic: self.metallic.clone(),
                 }
             }
         }
@@ -249,4 +257,115 @@ pub struct TorusKnotDesc {
     pub segments: u32,
     pub sides: u32,
     pub tube: Positive,
+}
+
+/// A material key's value: a constant (`T`, as the key reads it) or a texture table.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Textured<T> {
+    Value(T),
+    Texture(Box<TextureDesc>),
+}
+
+/// `{ texture = "file.png" }` or `{ checker = [c0, c1] }`, with `scale` and `offset` for the
+/// texture coordinates, a `factor` on the value and, for single values (`alpha`), the
+/// `channel` read (see `texture`).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureDesc {
+    pub texture: Option<Spanned<String>>,
+    pub checker: Option<Spanned<[Rgb; 2]>>,
+    pub scale: Option<Spanned<UvPair>>,
+    pub offset: Option<UvPair>,
+    pub factor: Option<Spanned<Rgb>>,
+    pub channel: Option<Spanned<Channel>>,
+}
+
+/// A fraction: a number in [0, 1] (`metallic`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unit(pub f64);
+
+impl<'de> Deserialize<'de> for Unit {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = f64::deserialize(d)?;
+        if (0.0..=1.0).contains(&v) {
+            Ok(Unit(v))
+        } else {
+            Err(de::Error::custom(format!(
+                "must be between 0 and 1, got {v}"
+            )))
+        }
+    }
+}
+
+/// A channel of an image, for a single value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Channel {
+    R,
+    G,
+    B,
+    A,
+}
+
+impl Channel {
+    pub fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// A number for both texture coordinates or [u, v]: finite.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvPair(pub [f64; 2]);
+
+impl<'de> Deserialize<'de> for UvPair {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            One(f64),
+            Two([f64; 2]),
+        }
+        let v = match Raw::deserialize(d)
+            .map_err(|_| de::Error::custom("expected a number or an array of 2 numbers"))?
+        {
+            Raw::One(x) => [x, x],
+            Raw::Two(v) => v,
+        };
+        if v.iter().all(|x| x.is_finite() && x.abs() <= MAX_MAGNITUDE) {
+            Ok(UvPair(v))
+        } else {
+            Err(de::Error::custom(format!(
+                "must be finite numbers of magnitude at most {MAX_MAGNITUDE:e}, got {v:?}"
+            )))
+        }
+    }
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Textured<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T>(PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> Visitor<'de> for V<T> {
+            type Value = Textured<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number, an array of 3 numbers or a texture table")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Self::Value, E> {
+                T::deserialize(v.into_deserializer()).map(Textured::Value)
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Self::Value, E> {
+                T::deserialize(v.into_deserializer()).map(Textured::Value)
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Self::Value, E> {
+                T::deserialize(v.into_deserializer()).map(Textured::Value)
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+                T::deserialize(de::value::SeqAccessDeserializer::new(seq)).map(Textured::Value)
+            }
+            fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+                TextureDesc::deserialize(de::value::MapAccessDeserializer::new(map))
+                    .map(|t| Textured::Texture(Box::new(t)))
+            }
+        }
+        d.deserialize_any(V(PhantomData))
+    }
 }

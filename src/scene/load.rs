@@ -3,10 +3,11 @@
 
 use super::camera::{build_camera, focus_camera};
 use super::description::{MaterialDesc, MeshDesc, SceneDesc};
-use super::materials::build_material;
+use super::materials::build_material_with;
 use super::mesh::{self, Transform};
 use super::mesh_triangle_room;
 use super::sky::build_sky;
+use super::textures::{MaterialTextures, SceneTextures, TextureLoader};
 use super::{builtin, BuildReport, Scene, SceneError};
 use crate::accel::{camera_probe, Accel, AccelChoice};
 use crate::geometry::torus_knot::TorusKnot;
@@ -107,6 +108,13 @@ struct Builder<'a> {
     file: &'a str,
     names: HashSet<String>,
     materials: Vec<Material>,
+    /// Per material, its textures (`None`: untextured).
+    material_textures: Vec<Option<Box<MaterialTextures>>>,
+    /// Per primitive, its corners' texture coordinates; empty while no primitive has any.
+    uvs: Vec<Option<[[f32; 2]; 3]>>,
+    loader: TextureLoader<'a>,
+    /// Files read besides the scene file.
+    files: Vec<PathBuf>,
     prims: Vec<Primitive>,
     lights: Vec<Light>,
     mesh_triangles: u64,
@@ -137,25 +145,53 @@ impl Builder<'_> {
 
     /// `flat`: a triangle, quad or mesh (whose emission may be one-sided), not a sphere.
     fn material(&mut self, m: &MaterialDesc, object: &str, flat: bool) -> Result<u32, SceneError> {
-        let material = build_material(m, self.src, self.file, object, flat)?;
-        self.materials.push(material);
-        Ok(self.materials.len() as u32 - 1)
+        let (material, textures) =
+            build_material_with(m, self.src, self.file, object, flat, &mut self.loader)?;
+        if !flat && textures.as_ref().is_some_and(|t| t.emission.is_some()) {
+            return Err(self.err(
+                None,
+                format!("{object}.emission"),
+                "a textured `emission` applies to triangles, quads and meshes, not spheres",
+            ));
+        }
+        Ok(self.push_material(material, textures))
     }
 
-    /// Add shapes sharing material `material`; emissive ones become lights.
-    fn add(&mut self, shapes: impl IntoIterator<Item = Shape>, material: u32) {
+    fn push_material(&mut self, material: Material, textures: Option<MaterialTextures>) -> u32 {
+        self.materials.push(material);
+        self.material_textures.push(textures.map(Box::new));
+        self.materials.len() as u32 - 1
+    }
+
+    /// Add shapes sharing material `material`, with their corners' texture coordinates if
+    /// they have any; emissive ones become lights.
+    fn add(
+        &mut self,
+        shapes: impl IntoIterator<Item = (Shape, Option<[[f32; 2]; 3]>)>,
+        material: u32,
+    ) {
         let m = &self.materials[material as usize];
-        for shape in shapes {
+        let emission_texture = self.material_textures[material as usize]
+            .as_ref()
+            .and_then(|t| t.emission.as_ref());
+        for (shape, uv) in shapes {
             let prim = self.prims.len() as u32;
-            let light = if m.is_emissive() {
+            if uv.is_some() && self.uvs.len() < self.prims.len() {
+                self.uvs.resize(self.prims.len(), None);
+            }
+            let emission = match (emission_texture, &shape) {
+                (Some(t), Shape::Triangle(_)) => super::textures::mean_over_triangle(t, uv),
+                _ => m.emission,
+            };
+            let light = if emission.max_element() > 0.0 {
                 self.lights.push(match shape {
                     Shape::Sphere(sphere) => {
-                        Light::Sphere(SphereLight::new(prim, sphere, m.emission))
+                        Light::Sphere(SphereLight::new(prim, sphere, emission))
                     }
                     Shape::Triangle(triangle) => Light::Triangle(TriangleLight {
                         prim,
                         triangle,
-                        emission: m.emission,
+                        emission,
                         two_sided: !m.one_sided,
                     }),
                 });
@@ -168,9 +204,19 @@ impl Builder<'_> {
                 material,
                 light,
             });
+            if !self.uvs.is_empty() {
+                self.uvs.push(uv);
+            }
         }
     }
 }
+
+/// Quads' texture coordinates: u along edge1, v from 1 at the corner to 0 along edge2 (see
+/// `scene::textures`), for the triangles (c, c + e1, c + e1 + e2) and (c, c + e1 + e2, c + e2).
+const QUAD_UVS: [[[f32; 2]; 3]; 2] = [
+    [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0]],
+    [[0.0, 1.0], [1.0, 0.0], [0.0, 0.0]],
+];
 
 fn build(
     desc: &SceneDesc,
@@ -186,6 +232,15 @@ fn build(
         file,
         names: HashSet::new(),
         materials: Vec::new(),
+        material_textures: Vec::new(),
+        uvs: Vec::new(),
+        loader: TextureLoader {
+            base_dir: options.base_dir.clone(),
+            cache: Default::default(),
+            progress: options.progress.as_deref(),
+            load: true,
+        },
+        files: Vec::new(),
         prims: Vec::new(),
         lights: Vec::new(),
         mesh_triangles: 0,
@@ -197,7 +252,7 @@ fn build(
         b.name(&s.name, &object)?;
         let material = b.material(&s.material(), &object, false)?;
         let sphere = Sphere::new(DVec3::from_array(s.center.0), s.radius.0);
-        b.add([Shape::Sphere(sphere)], material);
+        b.add([(Shape::Sphere(sphere), None)], material);
     }
     for (i, t) in desc.triangle.iter().enumerate() {
         let object = format!("triangle[{i}]");
@@ -212,7 +267,7 @@ fn build(
             ));
         }
         let material = b.material(&t.material(), &object, true)?;
-        b.add([Shape::Triangle(tri)], material);
+        b.add([(Shape::Triangle(tri), None)], material);
     }
     for (i, q) in desc.quad.iter().enumerate() {
         let object = format!("quad[{i}]");
@@ -234,7 +289,13 @@ fn build(
             ));
         }
         let material = b.material(&q.material(), &object, true)?;
-        b.add([Shape::Triangle(t1), Shape::Triangle(t2)], material);
+        let uv = |k: usize| {
+            b.material_textures[material as usize]
+                .is_some()
+                .then_some(QUAD_UVS[k])
+        };
+        let shapes = [(Shape::Triangle(t1), uv(0)), (Shape::Triangle(t2), uv(1))];
+        b.add(shapes, material);
     }
     for (i, m) in desc.mesh.iter().enumerate() {
         let object = format!("mesh[{i}]");
@@ -242,7 +303,12 @@ fn build(
         let mesh = build_mesh(&mut b, m, &object, options)?;
         let material = b.material(&m.material(), &object, true)?;
         let first = b.prims.len();
-        b.add(mesh.triangles.into_iter().map(Shape::Triangle), material);
+        b.add(
+            mesh.triangles
+                .into_iter()
+                .map(|t| (Shape::Triangle(t), None)),
+            material,
+        );
         if mesh.normals.iter().any(Option::is_some) {
             b.shading.resize(first, [[0.0; 3]; 3]);
             b.shading
@@ -251,8 +317,13 @@ fn build(
         b.warnings.extend(mesh.warnings);
     }
 
+    let mut files = std::mem::take(&mut b.files);
+    files.extend(b.loader.cache.files.iter().cloned());
     let Builder {
         materials,
+        material_textures,
+        mut uvs,
+        loader,
         prims,
         lights,
         mut shading,
@@ -262,6 +333,18 @@ fn build(
     if !shading.is_empty() {
         shading.resize(prims.len(), [[0.0; 3]; 3]);
     }
+    let textures = material_textures.iter().any(Option::is_some).then(|| {
+        if !uvs.is_empty() {
+            uvs.resize(prims.len(), None);
+        }
+        let t = SceneTextures {
+            materials: material_textures,
+            uvs,
+            images: loader.cache.len(),
+            bytes: loader.cache.bytes,
+        };
+        Box::new(t)
+    });
     let choice = options.accel.or(desc.accel).unwrap_or_default();
     // Probe with the camera's rays at the image's aspect ratio: 32 rows are plenty to tell
     // boxes that separate the objects from boxes that do not, at a cost of microseconds.
@@ -290,8 +373,12 @@ fn build(
              point's side is sampled"
         );
     }
+    let mut materials_text = super::materials::describe(&materials);
+    if let Some(t) = &textures {
+        materials_text += &format!("; {}", t.describe());
+    }
     let report = BuildReport {
-        materials: super::materials::describe(&materials),
+        materials: materials_text,
         accel: format!("{} ({why})", accel.describe(prims.len())),
         light_sampling,
         environment: sky.text,
@@ -306,6 +393,8 @@ fn build(
         lights,
         accel,
         shading,
+        textures,
+        files,
         background: sky.background,
         env_select: match (&sky.environment, no_emitters) {
             (None, _) => 0.0,
@@ -349,6 +438,7 @@ fn build_mesh(
                 Some(base) => base.join(path.get_ref()),
                 None => PathBuf::from(path.get_ref()),
             };
+            b.files.push(full.clone());
             // The reader's messages start with the file (and line).
             mesh::load_obj_with(&full, room, m.smooth, progress).map_err(|msg| {
                 let msg = if msg.ends_with(super::obj::NO_ROOM) {

@@ -12,13 +12,15 @@
 //! | `metal`, or `eta` + `k` | conductor | Fresnel 1 |
 //! | `specular` | plastic | 1 |
 
-use super::description::{DistributionName, MaterialDesc, MaterialName};
+use super::description::{DistributionName, MaterialDesc, MaterialName, Textured, Unit};
+use super::textures::{MaterialTextures, TextureLoader, Use};
 use super::SceneError;
 use crate::material::{
     metals, ConductorFresnel, Distribution, Glossy, Material, MaterialKind, Microfacet,
     RoughDielectric, SPECULAR_ALPHA,
 };
 use crate::math::DVec3;
+use crate::texture::Texture;
 use std::ops::Range;
 use toml::Spanned;
 
@@ -77,7 +79,8 @@ impl At<'_> {
 }
 
 /// The material of an object; `flat` for a triangle, quad or mesh (whose emission may be
-/// one-sided), not a sphere.
+/// one-sided), not a sphere. Textures are checked but not read (they read 0.5): for checks of
+/// the keys alone; the scene build uses [`build_material_with`].
 pub fn build_material(
     m: &MaterialDesc,
     src: &str,
@@ -85,24 +88,62 @@ pub fn build_material(
     object: &str,
     flat: bool,
 ) -> Result<Material, SceneError> {
+    let mut loader = TextureLoader::checks_only();
+    build_material_with(m, src, file, object, flat, &mut loader).map(|(m, _)| m)
+}
+
+/// [`build_material`] with its textures read by `loader`: the material (textured keys at
+/// their texture's mean) and the textures, if any key has one.
+pub fn build_material_with(
+    m: &MaterialDesc,
+    src: &str,
+    file: &str,
+    object: &str,
+    flat: bool,
+    loader: &mut TextureLoader,
+) -> Result<(Material, Option<MaterialTextures>), SceneError> {
     use MaterialName::*;
     let at = At { src, file, object };
+    let err = |span: Range<usize>, key: &str, msg: String| at.err(span, key, msg);
     let kind_name = m.material.unwrap_or_default();
-    let emission = m.emission.map_or(DVec3::ZERO, |e| DVec3::from_array(e.0));
+    let mut textures = MaterialTextures::default();
+    let (emission, tex) = match &m.emission {
+        None => (DVec3::ZERO, None),
+        Some(e) => {
+            let err = |span, sub: &str, msg| err(span, &sub_key("emission", sub), msg);
+            loader.value(e, Use::Emission, |v| DVec3::from_array(v.0), &err)?
+        }
+    };
+    textures.emission = tex;
     // Emitters do not reflect unless the scene gives them a colour; a conductor's colour is a
     // factor on its Fresnel reflectance.
-    let default_color = if emission.max_element() > 0.0 {
+    let default_color = if emission.max_element() > 0.0 || textures.emission.is_some() {
         0.0
     } else if kind_name == Conductor {
         1.0
     } else {
         DEFAULT_COLOR
     };
-    let color = m
-        .color
-        .map_or(DVec3::splat(default_color), |c| DVec3::from_array(c.0));
-    at.only(&m.ior, "ior", kind_name, &[Glass, Plastic])?;
-    at.only(&m.alpha, "alpha", kind_name, &[Glass, Conductor, Plastic])?;
+    let (color, tex) = match &m.color {
+        None => (DVec3::splat(default_color), None),
+        Some(c) => {
+            let err = |span, sub: &str, msg| err(span, &sub_key("color", sub), msg);
+            loader.value(c, Use::Color, |v| DVec3::from_array(v.0), &err)?
+        }
+    };
+    textures.color = tex;
+    at.only(
+        &m.ior,
+        "ior",
+        kind_name,
+        &[Glass, Plastic, MetallicRoughness],
+    )?;
+    at.only(
+        &m.alpha,
+        "alpha",
+        kind_name,
+        &[Glass, Conductor, Plastic, MetallicRoughness],
+    )?;
     at.only(&m.alpha_u, "alpha_u", kind_name, &[Glass, Conductor])?;
     at.only(&m.alpha_v, "alpha_v", kind_name, &[Glass, Conductor])?;
     at.only(
@@ -114,8 +155,28 @@ pub fn build_material(
     at.only(&m.eta, "eta", kind_name, &[Conductor])?;
     at.only(&m.k, "k", kind_name, &[Conductor])?;
     at.only(&m.metal, "metal", kind_name, &[Conductor])?;
-    at.only(&m.specular, "specular", kind_name, &[Plastic])?;
-    let distribution = roughness(m, &at)?;
+    at.only(
+        &m.specular,
+        "specular",
+        kind_name,
+        &[Plastic, MetallicRoughness],
+    )?;
+    at.only(&m.metallic, "metallic", kind_name, &[MetallicRoughness])?;
+    if let Some(a) = &m.alpha {
+        if let Textured::Texture(desc) = a.get_ref() {
+            if kind_name == Plastic {
+                return Err(at.err(
+                    a.span(),
+                    "alpha",
+                    "a plastic's `alpha` cannot be a texture: its coat's tables are computed for                      one alpha when the scene is built",
+                ));
+            }
+            let err = |span, sub: &str, msg| err(span, &sub_key("alpha", sub), msg);
+            let t = loader.texture(desc, Use::Value, a.span(), &err)?;
+            textures.alpha = Some((t, false));
+        }
+    }
+    let distribution = roughness(m, &at, textures.alpha.as_ref().map(|(t, _)| t))?;
     let ior = |default: f64| m.ior.as_ref().map_or(default, |i| i.get_ref().0);
     let kind = match kind_name {
         Diffuse => MaterialKind::Diffuse,
@@ -155,6 +216,37 @@ pub fn build_material(
             ))
             .kind()
         }
+        MetallicRoughness => {
+            let (metallic, tex) = match &m.metallic {
+                None => (DVec3::ZERO, None),
+                Some(x) => {
+                    let err = |span, sub: &str, msg| err(span, &sub_key("metallic", sub), msg);
+                    loader.value(x, Use::Value, |v: Unit| DVec3::splat(v.0), &err)?
+                }
+            };
+            textures.metallic = tex;
+            // KHR_materials_specular's colour and factor, from `specular` as [r, g, b]: the
+            // factor its largest component, the colour the rest.
+            let specular = m
+                .specular
+                .as_ref()
+                .map_or(DVec3::ONE, |s| DVec3::from_array(s.get_ref().0));
+            let factor = specular.max_element();
+            let tint = if factor > 0.0 {
+                specular / factor
+            } else {
+                DVec3::ONE
+            };
+            let alpha = distribution.map_or(0.0, |d| d.alpha_u);
+            Glossy::MetallicRoughness(crate::material::MetallicRoughness::new(
+                alpha,
+                metallic.x,
+                ior(DEFAULT_IOR),
+                factor,
+                tint,
+            ))
+            .kind()
+        }
     };
     if let Some(two_sided) = &m.two_sided {
         let problem = if !flat {
@@ -170,20 +262,44 @@ pub fn build_material(
     }
     // Flat emitters emit from their front face alone unless asked, as in pbrt and Mitsuba.
     let one_sided = flat && !m.two_sided.as_ref().is_some_and(|t| *t.get_ref());
-    Ok(Material {
+    let material = Material {
         kind,
         color,
         emission,
         one_sided,
-    })
+    };
+    Ok((material, (!textures.is_empty()).then_some(textures)))
+}
+
+/// `key.sub` (or `key` for the table itself), for errors inside a texture table.
+fn sub_key(key: &str, sub: &str) -> String {
+    if sub.is_empty() {
+        key.to_string()
+    } else {
+        format!("{key}.{sub}")
+    }
 }
 
 /// The microfacet distribution the keys ask for, or None for a smooth surface: `alpha`, or
 /// `alpha_u` with `alpha_v`, below [`SPECULAR_ALPHA`] in both directions is smooth; above it a
 /// direction's roughness is at least that (as Mitsuba clamps).
-fn roughness(m: &MaterialDesc, at: &At) -> Result<Option<Distribution>, SceneError> {
+fn roughness(
+    m: &MaterialDesc,
+    at: &At,
+    texture: Option<&Texture>,
+) -> Result<Option<Distribution>, SceneError> {
     let (alpha_u, alpha_v) = match (&m.alpha, &m.alpha_u, &m.alpha_v) {
-        (Some(a), None, None) => (a.get_ref().0, a.get_ref().0),
+        // A textured alpha builds the material at its mean; every hit sets its own.
+        (Some(a), None, None) => {
+            let a = match (a.get_ref(), texture) {
+                (Textured::Value(v), _) => v.0,
+                (Textured::Texture(_), Some(t)) => {
+                    t.mean_value().clamp(0.0, 1.0).max(SPECULAR_ALPHA)
+                }
+                (Textured::Texture(_), None) => SPECULAR_ALPHA,
+            };
+            (a, a)
+        }
         (None, Some(u), Some(v)) => (u.get_ref().0, v.get_ref().0),
         (None, None, None) => (0.0, 0.0),
         (Some(_), Some(x), _) | (Some(_), None, Some(x)) => {

@@ -10,6 +10,7 @@ pub mod materials;
 pub mod mesh;
 pub mod obj;
 mod sky;
+pub mod textures;
 
 use crate::accel::lanes::RayBatch;
 use crate::accel::Accel;
@@ -97,6 +98,13 @@ pub struct Scene {
     /// Per primitive, the shading normals of its three corners (all zero: flat); empty when
     /// the scene has no smooth-shaded mesh, so flat scenes pay one bounds check per hit.
     pub shading: Vec<[[f32; 3]; 3]>,
+    /// The textured materials and the primitives' texture coordinates; `None` without
+    /// textures, so untextured scenes pay one test per vertex (`Scene::material_at`).
+    pub textures: Option<Box<textures::SceneTextures>>,
+    /// Every file the build read besides the scene file (meshes, material libraries, glTF
+    /// buffers, textures), in the order read: what a change of the scene is watched and
+    /// hashed by.
+    pub files: Vec<std::path::PathBuf>,
     /// Radiance of the constant sky (black without one); unused when `environment` is set.
     pub background: DVec3,
     /// The environment map's light, when the scene has a map that is not black.

@@ -88,6 +88,10 @@ impl CausticTracer {
         if scene.lights.is_empty() {
             return Err("none (no emitters)".into());
         }
+        if scene.textures.is_some() {
+            // Its vertices' BSDFs would need the textures looked up at each light-path end.
+            return Err("path-traced (the scene has textures)".into());
+        }
         if let Some(m) = scene.materials.iter().find(|m| !m.kind.is_smallpt()) {
             // Its splats and joins assume diffuse, mirror and smooth glass vertices: a glossy
             // one has neither a bounded BSDF for the joins' roulette nor a delta chain's
