@@ -243,6 +243,8 @@ object_desc! {
         /// Interpolate vertex normals (default: where the file has them; the torus knot's exact
         /// ones); false shades every triangle flat.
         pub smooth: Option<bool>,
+        /// Use the OBJ's material libraries (default true; see `scene::mtl`).
+        pub mtl: Option<bool>,
         pub translate: Option<V3>,
         pub scale: Option<Positive>,
         pub rotate: Option<V3>,

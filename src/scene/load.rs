@@ -176,9 +176,6 @@ impl Builder<'_> {
             .and_then(|t| t.emission.as_ref());
         for (shape, uv) in shapes {
             let prim = self.prims.len() as u32;
-            if uv.is_some() && self.uvs.len() < self.prims.len() {
-                self.uvs.resize(self.prims.len(), None);
-            }
             let emission = match (emission_texture, &shape) {
                 (Some(t), Shape::Triangle(_)) => super::textures::mean_over_triangle(t, uv),
                 _ => m.emission,
@@ -204,7 +201,8 @@ impl Builder<'_> {
                 material,
                 light,
             });
-            if !self.uvs.is_empty() {
+            if uv.is_some() || !self.uvs.is_empty() {
+                self.uvs.resize(prim as usize, None);
                 self.uvs.push(uv);
             }
         }
@@ -300,15 +298,39 @@ fn build(
     for (i, m) in desc.mesh.iter().enumerate() {
         let object = format!("mesh[{i}]");
         b.name(&m.name, &object)?;
-        let mesh = build_mesh(&mut b, m, &object, options)?;
-        let material = b.material(&m.material(), &object, true)?;
+        let mut mesh = build_mesh(&mut b, m, &object, options)?;
+        let own = b.material(&m.material(), &object, true)?;
+        // Per `usemtl` name, its material (the entry's own where the libraries lack it).
+        let by_name = if m.mtl != Some(false) && !mesh.material_names.is_empty() {
+            let path = m.path.as_ref().map(|p| {
+                options
+                    .base_dir
+                    .clone()
+                    .unwrap_or_default()
+                    .join(p.get_ref())
+            });
+            mtl_materials(&mut b, m, &object, path.as_deref(), &mesh)?
+        } else {
+            Vec::new()
+        };
+        let textured = |b: &Builder, id: u32| b.material_textures[id as usize].is_some();
+        let any_textured = textured(&b, own) || by_name.iter().any(|&id| textured(&b, id));
         let first = b.prims.len();
-        b.add(
-            mesh.triangles
-                .into_iter()
-                .map(|t| (Shape::Triangle(t), None)),
-            material,
-        );
+        let uvs = std::mem::take(&mut mesh.uvs);
+        let materials = std::mem::take(&mut mesh.materials);
+        for (k, t) in mesh.triangles.drain(..).enumerate() {
+            let material = materials
+                .get(k)
+                .and_then(|&i| by_name.get(i as usize))
+                .copied()
+                .unwrap_or(own);
+            let uv = if any_textured {
+                uvs.get(k).copied().flatten()
+            } else {
+                None
+            };
+            b.add([(Shape::Triangle(t), uv)], material);
+        }
         if mesh.normals.iter().any(Option::is_some) {
             b.shading.resize(first, [[0.0; 3]; 3]);
             b.shading
@@ -410,6 +432,95 @@ fn build(
     })
 }
 
+/// The materials of a mesh's `usemtl` names, in the order of `mesh.material_names`: read from
+/// its `mtllib` libraries (relative to the OBJ at `obj`) and mapped by `scene::mtl`'s table,
+/// the entry's own keys over them. A library that cannot be read, a name no library has and
+/// statements the table does not use are named in the warnings; a broken texture is an error.
+fn mtl_materials(
+    b: &mut Builder,
+    m: &MeshDesc,
+    object: &str,
+    obj: Option<&Path>,
+    mesh: &mesh::Mesh,
+) -> Result<Vec<u32>, SceneError> {
+    let Some(obj) = obj else {
+        return Ok(Vec::new());
+    };
+    let field = format!("{object}.path");
+    let span = m.path.as_ref().map(|p| p.span());
+    let mut found: Vec<(super::mtl::MtlMaterial, String, PathBuf)> = Vec::new();
+    for (written, line) in &mesh.material_libs {
+        for path in super::mtl::library_paths(obj, written) {
+            let shown = path.display().to_string();
+            let bytes = match crate::files::read(&path, "MTL file") {
+                Ok(bytes) => bytes,
+                Err(e) => {
+                    b.warnings.push(format!(
+                        "{}:{line}: mtllib: {e} (its materials are left out; `mtl = false` \
+                         silences this)",
+                        obj.display()
+                    ));
+                    continue;
+                }
+            };
+            b.files.push(path.clone());
+            let lib = super::mtl::parse(&bytes, &shown)
+                .map_err(|e| b.err(span.clone(), field.clone(), e))?;
+            if !lib.skipped.is_empty() {
+                let names: Vec<String> = lib
+                    .skipped
+                    .iter()
+                    .map(|(k, l, n)| {
+                        format!(
+                            "{k} (line {l}{})",
+                            if *n > 1 {
+                                format!(", {n} times")
+                            } else {
+                                String::new()
+                            }
+                        )
+                    })
+                    .collect();
+                b.warnings
+                    .push(format!("{shown}: not used: {}", names.join(", ")));
+            }
+            let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+            found.extend(
+                lib.materials
+                    .into_iter()
+                    .map(|mm| (mm, shown.clone(), dir.clone())),
+            );
+        }
+    }
+    let own = m.material();
+    let mut ids = Vec::with_capacity(mesh.material_names.len());
+    let mut missing = Vec::new();
+    for (name, line) in &mesh.material_names {
+        // The last definition of a name wins, as in most readers.
+        let id = match found.iter().rev().find(|(mm, _, _)| mm.name == *name) {
+            Some((mm, shown, dir)) => {
+                let desc = super::mtl::material_desc(mm, shown, dir, &mut b.loader.cache)
+                    .map_err(|e| b.err(span.clone(), field.clone(), e))?;
+                let desc = super::mtl::overlay(desc, &own);
+                b.material(&desc, &format!("{object} (material `{name}`)"), true)?
+            }
+            None => {
+                missing.push(format!("`{name}` (line {line})"));
+                b.material(&own, object, true)?
+            }
+        };
+        ids.push(id);
+    }
+    if !missing.is_empty() && !mesh.material_libs.is_empty() {
+        b.warnings.push(format!(
+            "{}: usemtl {} not in its material libraries: the [[mesh]] entry's material",
+            obj.display(),
+            missing.join(", ")
+        ));
+    }
+    Ok(ids)
+}
+
 /// Sphere lights cut by other spheres' surfaces learn the cuts, so light sampling can leave out
 /// the parts hidden behind them (see `light::sphere`).
 fn clip_sphere_lights(lights: Vec<Light>, prims: &[Primitive]) -> Vec<Light> {
@@ -488,7 +599,7 @@ fn build_mesh(
                 } else {
                     Vec::new()
                 },
-                warnings: Vec::new(),
+                ..mesh::Mesh::default()
             }
         }
         (Some(path), Some(_)) => {

@@ -13,8 +13,9 @@
 //! OBJ vertex normals (`vn`) are interpolated across each triangle (smooth shading) unless the
 //! entry says `smooth = false`; `smooth = true` on a file without normals computes them from the
 //! faces around each vertex. The torus knot has exact normals, smooth unless `smooth = false`.
-//! Material libraries and texture coordinates are ignored: a mesh has the one material of its
-//! `[[mesh]]` entry. Polygons are fan-triangulated (see [`super::obj`]); points and lines are
+//! Texture coordinates (`vt`) are kept (turned so v runs downwards, see `texture`); the
+//! materials `usemtl` names come from the file's `mtllib` libraries (`scene::mtl`) unless the
+//! entry says `mtl = false`. Polygons are fan-triangulated (see [`super::obj`]); points and lines are
 //! skipped; triangles of zero area are dropped.
 
 use super::obj;
@@ -63,7 +64,8 @@ impl Transform {
     }
 
     /// Apply to a mesh, its normals rotated with it (the scale is uniform and positive, so a
-    /// rotation is all normals need), dropping triangles that end up degenerate.
+    /// rotation is all normals need), dropping triangles that end up degenerate (and their
+    /// normals, texture coordinates and materials with them).
     pub fn apply_mesh(&self, mesh: Mesh) -> Result<Mesh, String> {
         let m = self.matrix();
         let rot = self.matrix() * (1.0 / self.scale);
@@ -85,26 +87,29 @@ impl Transform {
                 n.normalize_or_zero().as_vec3().to_array()
             })
         };
-        let (triangles, normals) = if mesh.normals.is_empty() {
-            let triangles = mesh.triangles.par_iter().filter_map(placed).collect();
-            (triangles, Vec::new())
-        } else {
-            mesh.triangles
-                .par_iter()
-                .enumerate()
-                .filter_map(|(i, t)| {
-                    let ns = mesh.normals.get(i).copied().flatten().map(rotate);
-                    placed(t).map(|t| (t, ns))
-                })
-                .unzip()
-        };
+        let kept: Vec<(usize, Triangle)> = mesh
+            .triangles
+            .par_iter()
+            .enumerate()
+            .filter_map(|(i, t)| placed(t).map(|t| (i, t)))
+            .collect();
         if non_finite.load(Ordering::Relaxed) {
             return Err("a vertex is not a finite number".into());
         }
+        let all = kept.len() == mesh.triangles.len();
+        fn pick<T: Copy>(v: &[T], kept: &[(usize, Triangle)], all: bool) -> Vec<T> {
+            if v.is_empty() || all {
+                return v.to_vec();
+            }
+            kept.iter().map(|&(i, _)| v[i]).collect()
+        }
+        let normals = pick(&mesh.normals, &kept, all);
         Ok(Mesh {
-            triangles,
-            normals,
-            warnings: mesh.warnings,
+            normals: normals.into_iter().map(|n| n.map(rotate)).collect(),
+            uvs: pick(&mesh.uvs, &kept, all),
+            materials: pick(&mesh.materials, &kept, all),
+            triangles: kept.into_iter().map(|(_, t)| t).collect(),
+            ..mesh
         })
     }
 }
@@ -115,6 +120,15 @@ pub struct Mesh {
     pub triangles: Vec<Triangle>,
     /// Empty for a flat mesh, else one entry per triangle.
     pub normals: Vec<Option<[[f32; 3]; 3]>>,
+    /// Per triangle, its corners' texture coordinates (v downwards); empty when the file has
+    /// none.
+    pub uvs: Vec<Option<[[f32; 2]; 3]>>,
+    /// Per triangle, its material: an index into `material_names` (`obj::NONE`: none); empty
+    /// for a mesh of one material.
+    pub materials: Vec<u32>,
+    /// The OBJ's `usemtl` names and its `mtllib` files, with their lines.
+    pub material_names: Vec<(String, usize)>,
+    pub material_libs: Vec<(String, usize)>,
     /// What the reader skipped that the user may want to know (named by file).
     pub warnings: Vec<String>,
 }
@@ -175,8 +189,16 @@ pub fn load_obj_with(
     };
     let mut mesh = Mesh {
         triangles: Vec::with_capacity(data.triangles.len()),
-        normals: Vec::new(),
         warnings: data.warnings.clone(),
+        materials: data.triangle_materials.clone(),
+        material_names: data.material_names.clone(),
+        material_libs: data.material_libs.clone(),
+        ..Mesh::default()
+    };
+    // OBJ's v grows upwards, ptui's downwards (see `texture`).
+    let texcoord = |c: obj::Corner| {
+        let t = data.texcoords.get(c.vt as usize)?;
+        Some([t[0] as f32, (1.0 - t[1]) as f32])
     };
     let wants_normals = smooth != Some(false) && (!data.normals.is_empty() || !computed.is_empty());
     for t in &data.triangles {
@@ -196,13 +218,23 @@ pub fn load_obj_with(
         } else {
             None
         };
+        let mut uvs = match t.map(texcoord) {
+            [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+            _ => None,
+        };
         // Where the file's normals and its winding disagree, the normals say where the outside
         // is (pbrt turns the geometric normal towards the shading normal): rewind the triangle.
         if let (Some(ns), Some(g)) = (&mut normals, Triangle::new(p0, p1, p2).normal()) {
             if (ns[0] + ns[1] + ns[2]).dot(g) < 0.0 {
                 std::mem::swap(&mut p0, &mut p2);
                 ns.swap(0, 2);
+                if let Some(uv) = &mut uvs {
+                    uv.swap(0, 2);
+                }
             }
+        }
+        if !data.texcoords.is_empty() {
+            mesh.uvs.push(uvs);
         }
         mesh.triangles.push(Triangle::new(p0, p1, p2));
         if wants_normals {

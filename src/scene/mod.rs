@@ -8,6 +8,7 @@ pub mod error;
 pub mod load;
 pub mod materials;
 pub mod mesh;
+pub mod mtl;
 pub mod obj;
 mod sky;
 pub mod textures;

@@ -1,9 +1,9 @@
-//! A Wavefront OBJ reader for what common exporters write: `v`, `vn` and `f` (polygons of any
-//! size, fan-triangulated; `v`, `v/vt`, `v//vn`, `v/vt/vn` corners; negative indices counting
-//! back from the last vertex defined so far). Texture coordinates, groups (`o`, `g`), smoothing
-//! groups (`s`), points and lines are skipped; `mtllib` / `usemtl` are skipped with one warning
-//! (a mesh takes the material of its `[[mesh]]` entry). Statements the format has but a renderer
-//! of triangles does not need (free-form curves and surfaces) are skipped with one warning.
+//! A Wavefront OBJ reader for what common exporters write: `v`, `vt`, `vn` and `f` (polygons of
+//! any size, fan-triangulated; `v`, `v/vt`, `v//vn`, `v/vt/vn` corners; negative indices
+//! counting back from the last vertex defined so far), `mtllib` (the material libraries, read by
+//! `scene::mtl`) and `usemtl` (each face's material). Groups (`o`, `g`), smoothing groups (`s`),
+//! points and lines are skipped. Statements the format has but a renderer of triangles does not
+//! need (free-form curves and surfaces) are skipped with one warning.
 //!
 //! Written here rather than read with `tobj` so every refusal names its line: a non-finite or
 //! huge coordinate, an index of 0 or out of range, a truncated statement or a word that is not a
@@ -15,13 +15,18 @@ use std::path::Path;
 
 /// No normal: the corner or face is flat-shaded.
 pub const NO_NORMAL: u32 = u32::MAX;
+/// No texture coordinate (also: no material for a face).
+pub const NONE: u32 = u32::MAX;
 
-/// One corner of a face: indices into [`ObjData::positions`] and [`ObjData::normals`].
+/// One corner of a face: indices into [`ObjData::positions`], [`ObjData::texcoords`] and
+/// [`ObjData::normals`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Corner {
     pub v: u32,
     /// [`NO_NORMAL`] when the corner names none.
     pub vn: u32,
+    /// [`NONE`] when the corner names none.
+    pub vt: u32,
 }
 
 /// The geometry of an OBJ file, triangulated: three corners per triangle.
@@ -29,8 +34,17 @@ pub struct Corner {
 pub struct ObjData {
     pub positions: Vec<[f64; 3]>,
     pub normals: Vec<[f64; 3]>,
+    /// `vt` u and v as written (v growing upwards).
+    pub texcoords: Vec<[f64; 2]>,
     pub triangles: Vec<[Corner; 3]>,
-    /// Things skipped that the user may want to know about (materials, unknown statements).
+    /// Per triangle, its `usemtl` material: an index into `material_names` ([`NONE`] before
+    /// any `usemtl`); empty when the file has no `usemtl`.
+    pub triangle_materials: Vec<u32>,
+    /// The names `usemtl` gives, in order of first use, with that line.
+    pub material_names: Vec<(String, usize)>,
+    /// The `mtllib` files as written, with their line.
+    pub material_libs: Vec<(String, usize)>,
+    /// Things skipped that the user may want to know about (unknown statements).
     pub warnings: Vec<String>,
 }
 
@@ -39,6 +53,7 @@ pub struct ObjData {
 struct Face {
     start: usize,
     len: usize,
+    material: u32,
 }
 
 /// Parse the OBJ file at `path`; `limit` is how many triangles the caller accepts. Errors read
@@ -73,10 +88,11 @@ pub fn parse_with(
     progress: Option<&Progress>,
 ) -> Result<ObjData, String> {
     let mut data = ObjData::default();
-    let mut corners: Vec<(i64, i64, usize)> = Vec::new();
+    let mut corners: Vec<(i64, i64, i64, usize)> = Vec::new();
     let mut faces: Vec<Face> = Vec::new();
     let mut triangle_count: u64 = 0;
-    let mut materials_seen = false;
+    let mut material = NONE;
+    let mut material_index: std::collections::HashMap<String, u32> = Default::default();
     let mut unknown: Option<(usize, String)> = None;
     let mut unknown_count = 0usize;
     let err = |line: usize, msg: String| format!("{name}:{line}: {msg}");
@@ -139,12 +155,30 @@ pub fn parse_with(
                 }
                 data.normals.push(n);
             }
+            "vt" => {
+                let t = texcoord(&mut words).map_err(|m| err(line, m))?;
+                if t.iter().any(|c| !c.is_finite() || c.abs() > MAX_MAGNITUDE) {
+                    return Err(err(
+                        line,
+                        format!(
+                            "texture coordinate {} is {t:?}: each must be a finite number of \
+                             magnitude at most {MAX_MAGNITUDE:e}",
+                            data.texcoords.len() + 1
+                        ),
+                    ));
+                }
+                data.texcoords.push(t);
+            }
             "f" | "fo" => {
                 let start = corners.len();
+                let counts = (
+                    data.positions.len(),
+                    data.texcoords.len(),
+                    data.normals.len(),
+                );
                 for word in words {
-                    let c = corner(word, data.positions.len(), data.normals.len())
-                        .map_err(|m| err(line, m))?;
-                    corners.push((c.0, c.1, line));
+                    let c = corner(word, counts).map_err(|m| err(line, m))?;
+                    corners.push((c.0, c.1, c.2, line));
                 }
                 let len = corners.len() - start;
                 if len < 3 {
@@ -159,11 +193,30 @@ pub fn parse_with(
                         "{name}: has more than {limit} triangles, {NO_ROOM}"
                     ));
                 }
-                faces.push(Face { start, len });
+                faces.push(Face {
+                    start,
+                    len,
+                    material,
+                });
             }
-            "mtllib" | "usemtl" => materials_seen = true,
-            // Texture coordinates, groups, smoothing groups, points, lines: nothing to do.
-            "vt" | "vp" | "o" | "g" | "s" | "l" | "p" | "mg" => {}
+            "mtllib" => {
+                // File names may hold spaces; several files are rare and then space-separated,
+                // so a name that exists whole is taken whole (`scene::mtl` resolves them).
+                let rest = content.trim_start()["mtllib".len()..].trim();
+                if !rest.is_empty() {
+                    data.material_libs.push((rest.to_string(), line));
+                }
+            }
+            "usemtl" => {
+                let name = content.trim_start()["usemtl".len()..].trim().to_string();
+                let next = data.material_names.len() as u32;
+                material = *material_index.entry(name.clone()).or_insert_with(|| {
+                    data.material_names.push((name, line));
+                    next
+                });
+            }
+            // Groups, smoothing groups, points, lines: nothing to do.
+            "vp" | "o" | "g" | "s" | "l" | "p" | "mg" => {}
             _ => {
                 unknown_count += 1;
                 unknown.get_or_insert((line, keyword.chars().take(32).collect()));
@@ -186,31 +239,34 @@ pub fn parse_with(
         }
     };
     data.triangles.reserve(triangle_count as usize);
+    let with_materials = !data.material_names.is_empty();
     for f in &faces {
         let mut resolved = Vec::with_capacity(f.len);
-        for &(v, vn, line) in &corners[f.start..f.start + f.len] {
+        for &(v, vt, vn, line) in &corners[f.start..f.start + f.len] {
             let v = check(v, data.positions.len(), "vertex", line)?;
             let vn = if vn == i64::MIN {
                 NO_NORMAL
             } else {
                 check(vn, data.normals.len(), "normal", line)?
             };
-            resolved.push(Corner { v, vn });
+            let vt = if vt == i64::MIN {
+                NONE
+            } else {
+                check(vt, data.texcoords.len(), "texture coordinate", line)?
+            };
+            resolved.push(Corner { v, vn, vt });
         }
         // A fan around the first corner, as tobj, pbrt and Mitsuba triangulate.
         for k in 1..f.len - 1 {
             data.triangles
                 .push([resolved[0], resolved[k], resolved[k + 1]]);
+            if with_materials {
+                data.triangle_materials.push(f.material);
+            }
         }
     }
     if data.triangles.is_empty() {
         return Err(format!("{name}: contains no faces"));
-    }
-    if materials_seen {
-        data.warnings.push(format!(
-            "{name}: its materials (mtllib / usemtl) are ignored: a mesh takes the material of \
-             its [[mesh]] entry"
-        ));
     }
     if let Some((line, word)) = unknown {
         data.warnings.push(format!(
@@ -242,13 +298,17 @@ fn numbers<const N: usize>(
     Ok(out)
 }
 
-/// A face corner `v`, `v/vt`, `v//vn` or `v/vt/vn` as 0-based indices (the normal i64::MIN
-/// when absent). Negative indices count back from the counts so far; the range of positive ones
-/// is checked once the whole file is read.
-fn corner(word: &str, positions: usize, normals: usize) -> Result<(i64, i64), String> {
+/// A face corner `v`, `v/vt`, `v//vn` or `v/vt/vn` as 0-based indices (texture coordinate and
+/// normal i64::MIN when absent). Negative indices count back from the counts so far
+/// (positions, texture coordinates, normals); the range of positive ones is checked once the
+/// whole file is read.
+fn corner(
+    word: &str,
+    (positions, texcoords, normals): (usize, usize, usize),
+) -> Result<(i64, i64, i64), String> {
     let mut parts = word.split('/');
     let v = parts.next().unwrap_or("");
-    let _vt = parts.next();
+    let vt = parts.next();
     let vn = parts.next();
     if parts.next().is_some() {
         return Err(format!(
@@ -257,11 +317,34 @@ fn corner(word: &str, positions: usize, normals: usize) -> Result<(i64, i64), St
         ));
     }
     let v = index(v, positions, "vertex", word)?;
+    let vt = match vt {
+        None | Some("") => i64::MIN,
+        Some(s) => index(s, texcoords, "texture coordinate", word)?,
+    };
     let vn = match vn {
         None | Some("") => i64::MIN,
         Some(s) => index(s, normals, "normal", word)?,
     };
-    Ok((v, vn))
+    Ok((v, vt, vn))
+}
+
+/// `vt u [v [w]]`: v is 0 when absent, w is ignored.
+fn texcoord(words: &mut std::str::SplitWhitespace) -> Result<[f64; 2], String> {
+    let mut out = [0.0; 2];
+    for (i, slot) in out.iter_mut().enumerate() {
+        match words.next() {
+            Some(word) => {
+                *slot = word
+                    .parse::<f64>()
+                    .map_err(|_| format!("`vt`: `{}` is not a number", short(word)))?
+            }
+            None if i == 0 => {
+                return Err("truncated `vt` line: a texture coordinate needs u".into())
+            }
+            None => break,
+        }
+    }
+    Ok(out)
 }
 
 fn index(s: &str, count: usize, what: &str, word: &str) -> Result<i64, String> {
@@ -328,12 +411,19 @@ mod tests {
     }
 
     #[test]
-    fn groups_and_materials_are_skipped_with_one_warning() {
+    fn materials_and_texture_coordinates_are_read() {
         let d = ok(
-            "mtllib a.mtl\no x\ng y\ns 1\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl n\nf 1 2 3\n",
+            "mtllib my lib.mtl\no x\ng y\ns 1\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\n\
+             vt 0.25 0.75\nvt 1\nusemtl n\nf 1/1 2/2 3/-1\nusemtl m\nf 1 2 3\n",
         );
-        assert_eq!(d.warnings.len(), 1, "{:?}", d.warnings);
-        assert!(d.warnings[0].contains("t.obj") && d.warnings[0].contains("mtllib"));
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+        assert_eq!(d.material_libs, [("my lib.mtl".to_string(), 1)]);
+        let names: Vec<&str> = d.material_names.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["m", "n"]);
+        assert_eq!(d.triangle_materials, [1, 0]);
+        assert_eq!(d.texcoords, [[0.25, 0.75], [1.0, 0.0]]);
+        assert_eq!(d.triangles[0].map(|c| c.vt), [0, 1, 1]);
+        assert_eq!(d.triangles[1][0].vt, NONE);
     }
 
     #[test]
@@ -355,6 +445,13 @@ mod tests {
             (format!("{tri}\nf 1 2 x\n"), 5, "not a vertex index"),
             (format!("{tri}v 1e39 0 0\n"), 4, "magnitude"),
             (format!("{tri}v 1 2 \\\n\nf 1 2 3\n"), 4, "truncated"),
+            (
+                format!("{tri}vt 0 0\nf 1/1 2/2 3/1\n"),
+                5,
+                "texture coordinate index 2",
+            ),
+            (format!("{tri}vt nan 0\nf 1 2 3\n"), 4, "finite"),
+            (format!("{tri}vt\nf 1 2 3\n"), 4, "truncated"),
         ] {
             let e = bad(&src);
             assert!(
