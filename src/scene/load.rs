@@ -301,7 +301,18 @@ fn build(
         let mut mesh = build_mesh(&mut b, m, &object, options)?;
         let own = b.material(&m.material(), &object, true)?;
         // Per `usemtl` name, its material (the entry's own where the libraries lack it).
-        let by_name = if m.mtl != Some(false) && !mesh.material_names.is_empty() {
+        let by_name = if let Some(model) = mesh.model.take() {
+            // A glTF's own materials, unless the entry gives material keys of its own.
+            if has_keys(&m.material()) {
+                Vec::new()
+            } else {
+                let ids = model
+                    .materials
+                    .into_iter()
+                    .map(|(mat, tex)| b.push_material(mat, tex));
+                ids.collect()
+            }
+        } else if m.mtl != Some(false) && !mesh.material_names.is_empty() {
             let path = m.path.as_ref().map(|p| {
                 options
                     .base_dir
@@ -432,6 +443,24 @@ fn build(
     })
 }
 
+/// Whether an object's table gives any material key.
+fn has_keys(m: &MaterialDesc) -> bool {
+    m.material.is_some()
+        || m.color.is_some()
+        || m.emission.is_some()
+        || m.ior.is_some()
+        || m.two_sided.is_some()
+        || m.alpha.is_some()
+        || m.alpha_u.is_some()
+        || m.alpha_v.is_some()
+        || m.distribution.is_some()
+        || m.eta.is_some()
+        || m.k.is_some()
+        || m.metal.is_some()
+        || m.specular.is_some()
+        || m.metallic.is_some()
+}
+
 /// The materials of a mesh's `usemtl` names, in the order of `mesh.material_names`: read from
 /// its `mtllib` libraries (relative to the OBJ at `obj`) and mapped by `scene::mtl`'s table,
 /// the entry's own keys over them. A library that cannot be read, a name no library has and
@@ -550,6 +579,25 @@ fn build_mesh(
                 None => PathBuf::from(path.get_ref()),
             };
             b.files.push(full.clone());
+            let ext = full
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(str::to_ascii_lowercase);
+            if matches!(ext.as_deref(), Some("gltf" | "glb")) {
+                let cache = &mut b.loader.cache;
+                let read = super::gltf::load(&full, room, m.smooth, cache, progress);
+                let (mut mesh, model) = read.map_err(|msg| {
+                    let msg = if msg.ends_with(super::obj::NO_ROOM) {
+                        format!("{msg} ({why})")
+                    } else {
+                        msg
+                    };
+                    b.err(Some(path.span()), format!("{object}.path"), msg)
+                })?;
+                b.files.extend(model.files.iter().cloned());
+                mesh.model = Some(Box::new(model));
+                return place_mesh(b, m, object, progress, mesh);
+            }
             // The reader's messages start with the file (and line).
             mesh::load_obj_with(&full, room, m.smooth, progress).map_err(|msg| {
                 let msg = if msg.ends_with(super::obj::NO_ROOM) {
@@ -617,6 +665,17 @@ fn build_mesh(
             ))
         }
     };
+    place_mesh(b, m, object, progress, built)
+}
+
+/// A mesh placed by its entry's scale, rotation and translation.
+fn place_mesh(
+    b: &mut Builder,
+    m: &MeshDesc,
+    object: &str,
+    progress: Option<&Progress>,
+    built: mesh::Mesh,
+) -> Result<mesh::Mesh, SceneError> {
     let transform = Transform {
         scale: m.scale.map_or(1.0, |s| s.0),
         rotate_degrees: m.rotate.map_or(DVec3::ZERO, |r| DVec3::from_array(r.0)),

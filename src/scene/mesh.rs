@@ -131,6 +131,8 @@ pub struct Mesh {
     pub material_libs: Vec<(String, usize)>,
     /// What the reader skipped that the user may want to know (named by file).
     pub warnings: Vec<String>,
+    /// A glTF model's materials (by `materials`' indices) and camera.
+    pub model: Option<Box<super::gltf::Model>>,
 }
 
 impl Mesh {

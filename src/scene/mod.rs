@@ -5,6 +5,8 @@ pub mod builtin;
 mod camera;
 pub mod description;
 pub mod error;
+pub mod gltf;
+pub mod gltf_material;
 pub mod load;
 pub mod materials;
 pub mod mesh;

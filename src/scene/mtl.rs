@@ -221,7 +221,8 @@ pub fn material_desc(
     }
     let clamp3 = |c: [f64; 3]| c.map(|x| x.clamp(0.0, 1.0));
     let texture = |s: &MapStatement, cache: &mut Cache, factor: Option<[f64; 3]>| {
-        let path = dir.join(&s.file);
+        // Absolute: the scene build joins relative texture paths to the scene file's folder.
+        let path = std::path::absolute(dir.join(&s.file)).unwrap_or_else(|_| dir.join(&s.file));
         cache
             .get(&path, None)
             .map_err(|e| format!("{mtl}:{}: {e}", s.line))?;
