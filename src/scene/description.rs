@@ -268,6 +268,16 @@ pub enum Textured<T> {
     Texture(Box<TextureDesc>),
 }
 
+impl<T> Textured<T> {
+    /// The constant, if the key is one.
+    pub fn value(&self) -> Option<&T> {
+        match self {
+            Textured::Value(v) => Some(v),
+            Textured::Texture(_) => None,
+        }
+    }
+}
+
 /// `{ texture = "file.png" }` or `{ checker = [c0, c1] }`, with `scale` and `offset` for the
 /// texture coordinates, a `factor` on the value and, for single values (`alpha`), the
 /// `channel` read (see `texture`).

@@ -38,8 +38,16 @@ impl S {
             center: d.center.0,
             radius: d.radius.0,
             material: d.material.map(|m| format!("{m:?}").to_lowercase()),
-            color: d.color.map(|c| c.0),
-            emission: d.emission.map(|e| e.0),
+            color: d
+                .color
+                .as_ref()
+                .and_then(|c| c.get_ref().value())
+                .map(|c| c.0),
+            emission: d
+                .emission
+                .as_ref()
+                .and_then(|e| e.get_ref().value())
+                .map(|e| e.0),
             ior: d.ior.as_ref().map(|i| i.get_ref().0),
         }
     }
