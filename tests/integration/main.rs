@@ -23,6 +23,7 @@ mod fuzz_scene;
 mod invariance_power;
 mod lens;
 mod mesh;
+mod metallic_roughness;
 mod models;
 mod painterly;
 mod ray_count;

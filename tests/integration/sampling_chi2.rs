@@ -17,7 +17,7 @@ const PHI_BINS: usize = 40;
 const SAMPLES: usize = 400_000;
 /// Family-wise significance level over all tests in this file (Sidak-corrected per test).
 const ALPHA: f64 = 0.01;
-const TESTS: f64 = 18.0;
+const TESTS: f64 = 24.0;
 
 fn bin_of(w: DVec3) -> usize {
     let z = w.z.clamp(-1.0, 1.0);
@@ -53,7 +53,7 @@ fn expected_fractions(pdf: &dyn Fn(DVec3) -> f64, sub: usize) -> Vec<f64> {
 }
 
 /// Run the test over the whole sphere of directions; panics if the histogram does not match.
-fn chi2_test(
+pub(crate) fn chi2_test(
     name: &str,
     sample: impl FnMut(&mut Rng) -> Option<DVec3>,
     pdf: impl Fn(DVec3) -> f64,
@@ -66,7 +66,7 @@ fn chi2_test(
 /// return nothing for part of its draws (it samples a bounding cone and keeps what reaches the
 /// light): its pdf is then a density over all draws, integrating to the fraction kept, and the
 /// rejections are one more bin, expected 1 - that integral.
-fn chi2_test_with(
+pub(crate) fn chi2_test_with(
     name: &str,
     sub: usize,
     rejects: bool,
