@@ -68,11 +68,31 @@ pub fn load(
     if let Some(p) = progress {
         p.start(format!("reading {shown}"), 0);
     }
-    // The reader of the JSON is a crate's: whatever it does with a malformed file must end in an
-    // error here, not in a crash of the renderer.
-    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(&bytes))
-        .map_err(|_| format!("{shown}: not a glTF file this reader can parse"))?;
-    let gltf = parsed.map_err(|e| format!("{shown}: not a valid glTF file: {e}"))?;
+    // The `gltf` crate indexes its document without checks in places (its validation and its
+    // accessors to images and textures, found by tests/integration/fuzz_models.rs): whatever
+    // it does with a malformed file must end in an error here, not in a crash of the renderer.
+    // The cache is dropped with the failed scene, so nothing half-read survives.
+    let read =
+        std::panic::AssertUnwindSafe(|| read_model(path, &bytes, limit, smooth, cache, progress));
+    std::panic::catch_unwind(read).unwrap_or_else(|_| {
+        Err(format!(
+            "{shown}: not a valid glTF file (an index or a reference out of range)"
+        ))
+    })
+}
+
+/// [`load`] on the file's bytes.
+fn read_model(
+    path: &Path,
+    bytes: &[u8],
+    limit: u64,
+    smooth: Option<bool>,
+    cache: &mut Cache,
+    progress: Option<&Progress>,
+) -> Result<(Mesh, Model), String> {
+    let shown = path.display().to_string();
+    let gltf = gltf::Gltf::from_slice(bytes)
+        .map_err(|e| format!("{shown}: not a valid glTF file: {e}"))?;
     let doc = &gltf.document;
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut model = Model::default();

@@ -18,6 +18,7 @@ mod environment;
 mod extreme_files;
 mod extreme_scenes;
 mod furnace;
+mod fuzz_models;
 mod fuzz_obj;
 mod fuzz_scene;
 mod invariance_power;

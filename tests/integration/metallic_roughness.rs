@@ -23,8 +23,14 @@ const CASES: [(f64, f64, f64, f64); 6] = [
 
 fn material(alpha: f64, metallic: f64, specular: f64) -> Material {
     Material {
-        kind: Glossy::MetallicRoughness(MetallicRoughness::new(alpha, metallic, 1.5, specular, DVec3::ONE))
-            .kind(),
+        kind: Glossy::MetallicRoughness(MetallicRoughness::new(
+            alpha,
+            metallic,
+            1.5,
+            specular,
+            DVec3::ONE,
+        ))
+        .kind(),
         color: DVec3::new(0.9, 0.6, 0.3),
         emission: DVec3::ZERO,
         one_sided: false,
@@ -44,7 +50,9 @@ fn metallic_roughness_samples_its_pdf() {
     for (alpha, metallic, specular, cos_o) in CASES {
         let m = material(alpha, metallic, specular);
         let (nn, wo) = setup(cos_o);
-        let name = format!("metallic-roughness alpha {alpha} metallic {metallic} specular {specular} cos {cos_o}");
+        let name = format!(
+            "metallic-roughness alpha {alpha} metallic {metallic} specular {specular} cos {cos_o}"
+        );
         // Reflections of visible normals that fall below the horizon are not returned: the
         // rejections are a bin of their own (expected 1 - the pdf's integral).
         crate::sampling_chi2::chi2_test_with(
@@ -54,9 +62,15 @@ fn metallic_roughness_samples_its_pdf() {
             |rng| {
                 let s = m.sample(wo, nn, rng.next_f64(), (rng.next_f64(), rng.next_f64()))?;
                 let e = m.eval(wo, s.wi, nn);
-                assert!((e.pdf - s.pdf).abs() <= 1e-9 * s.pdf.max(1.0), "{name}: pdf");
+                assert!(
+                    (e.pdf - s.pdf).abs() <= 1e-9 * s.pdf.max(1.0),
+                    "{name}: pdf"
+                );
                 let w = e.f_cos / e.pdf;
-                assert!((s.weight - w).abs().max_element() <= 1e-9 * w.max_element().max(1.0), "{name}: weight");
+                assert!(
+                    (s.weight - w).abs().max_element() <= 1e-9 * w.max_element().max(1.0),
+                    "{name}: weight"
+                );
                 Some(s.wi)
             },
             |w| m.eval(wo, w, nn).pdf,
@@ -96,7 +110,11 @@ fn metallic_roughness_albedo_is_its_integral_and_at_most_one() {
         }
         let mean = sum / n as f64;
         let v = (sum2 / n as f64 - mean * mean) / n as f64;
-        let se = DVec3::new(v.x.max(0.0).sqrt(), v.y.max(0.0).sqrt(), v.z.max(0.0).sqrt());
+        let se = DVec3::new(
+            v.x.max(0.0).sqrt(),
+            v.y.max(0.0).sqrt(),
+            v.z.max(0.0).sqrt(),
+        );
         for c in 0..3 {
             let tol = 5.0 * se[c] + 2e-3 * quad[c];
             assert!(
