@@ -12,6 +12,7 @@ fn main() {
         Some(Command::Merge(args)) => cli::merge::run(args),
         Some(Command::Check(args)) => cli::check::run(args),
         Some(Command::Bench(args)) => cli::bench::run(args),
+        Some(Command::Scene(args)) => cli::scene_from::run(args),
         Some(Command::Scenes) => {
             for name in builtin::names() {
                 println!("{name}");

@@ -5,6 +5,7 @@ pub mod check;
 pub mod converge;
 pub mod merge;
 pub mod render;
+pub mod scene_from;
 pub mod scene_progress;
 pub mod tui;
 
@@ -42,6 +43,8 @@ pub enum Command {
     Merge(merge::MergeArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Write the scene ptui makes for a bare model (`ptui model.glb` opens it), for editing.
+    Scene(scene_from::SceneArgs),
     /// Render scenes briefly and test them against their `[check]` expectations (default: all of
     /// scenes/extreme/).
     Check(check::CheckArgs),

@@ -366,7 +366,13 @@ impl FilmHeader {
 /// scene file is another scene. `spec` is what `ptui render` takes: a file, else a built-in.
 pub fn scene_hash(spec: &str) -> Result<String, String> {
     let path = Path::new(spec);
-    let (src, base) = if path.is_file() {
+    let (src, base) = if path.is_file() && crate::scene::model::is_model(path) {
+        let name = path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        let src = crate::scene::model::scene_text(path, &name)?;
+        (src, path.parent().map(Path::to_path_buf))
+    } else if path.is_file() {
         let src = std::fs::read_to_string(path).map_err(|e| format!("{spec}: {e}"))?;
         (src, path.parent().map(Path::to_path_buf))
     } else if let Some(src) = crate::scene::builtin::get(spec) {

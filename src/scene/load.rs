@@ -45,6 +45,9 @@ pub fn load(spec: &str) -> Result<Scene, SceneError> {
 /// [`load`] with build options; a scene file's folder becomes the base of its mesh paths.
 pub fn load_with(spec: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
     let path = Path::new(spec);
+    if path.is_file() && super::model::is_model(path) {
+        return load_model(path, spec, options);
+    }
     if path.is_file() {
         let src = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
             path: path.to_path_buf(),
@@ -69,6 +72,30 @@ pub fn load_with(spec: &str, options: &BuildOptions) -> Result<Scene, SceneError
             builtins: builtin::names().join(", "),
         }),
     }
+}
+
+/// A bare model (OBJ, glTF) as the scene `scene::model` makes for it.
+fn load_model(path: &Path, spec: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
+    let name = path
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let src = super::model::scene_text(path, &name).map_err(|msg| {
+        let own = format!("{}: ", path.display());
+        let msg = msg.strip_prefix(&own).unwrap_or(&msg).to_string();
+        SceneError::at(spec, "", None, None, msg)
+    })?;
+    let options = BuildOptions {
+        base_dir: Some(path.parent().map_or_else(PathBuf::new, Path::to_path_buf)),
+        ..options.clone()
+    };
+    let mut scene = load_str_with(&src, spec, &options)?;
+    if src.contains("builtin:sky") {
+        scene.report.warnings.push(format!(
+            "{spec} has no emitters: lit by the built-in sky (`ptui scene --from {spec} -o \
+             scene.toml` writes the scene to edit)"
+        ));
+    }
+    Ok(scene)
 }
 
 /// Parse and build a scene from TOML text; `file` names it in errors.

@@ -10,6 +10,7 @@ pub mod gltf_material;
 pub mod load;
 pub mod materials;
 pub mod mesh;
+pub mod model;
 pub mod mtl;
 pub mod obj;
 mod sky;
