@@ -476,7 +476,7 @@ fn add_primitive(
             format!("index {bad} is out of range: the primitive has {n} vertices"),
         ));
     }
-    if indices.len() % 3 != 0 {
+    if !indices.len().is_multiple_of(3) {
         let e = format!("{} indices do not make whole triangles", indices.len());
         return Err(match &index_acc {
             Some(a) => fail(a, e),

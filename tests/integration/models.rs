@@ -143,8 +143,7 @@ fn a_gltf_renders_as_the_same_scene_as_obj() {
 fn refused(scene_toml: &Path, needles: &[&str]) -> String {
     let t = Instant::now();
     let e = scene::load(scene_toml.to_str().expect("utf-8"))
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(
         t.elapsed().as_secs_f64() < 1.0,
