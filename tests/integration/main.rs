@@ -26,6 +26,7 @@ mod mesh;
 mod painterly;
 mod ray_count;
 mod reference;
+mod reference_materials;
 mod reference_mesh;
 mod sampling_chi2;
 mod scene_errors;
