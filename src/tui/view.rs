@@ -219,7 +219,7 @@ fn draw_status(frame: &mut Frame, app: &App, area: Rect) {
         Layout::vertical([Constraint::Length(1), Constraint::Length(1)]).areas(area);
     let width = area.width as usize;
     if let Some(snap) = &app.snapshot {
-        let err = if snap.error.rmse.is_finite() {
+        let err = if snap.error.is_known() {
             format!(
                 " · est. error {:.4} (rel {:.3})",
                 snap.error.rmse,

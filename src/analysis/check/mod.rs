@@ -21,6 +21,7 @@ pub mod extreme;
 
 use crate::analysis::stats;
 use crate::checked::{de_count, de_dimension, Rgb};
+use crate::input;
 use crate::render::film::Film;
 use crate::render::{build_pool, RenderError, Renderer};
 use crate::sampling::SamplerKind;
@@ -101,19 +102,18 @@ pub struct Source {
 pub enum CheckError {
     #[error(transparent)]
     Scene(#[from] SceneError),
-    #[error("{scene}: {source}")]
-    Render { scene: String, source: RenderError },
+    #[error("{scene}: {error}")]
+    Render { scene: String, error: RenderError },
 }
 
 /// Find a scene by file path, extreme scene name (with or without `extreme/`), or built-in name.
 pub fn resolve(spec: &str, dir: Option<&Path>) -> Result<Source, SceneError> {
     let candidates = [dir.map(|d| d.join(spec)), Some(PathBuf::from(spec))];
     for path in candidates.into_iter().flatten() {
-        if path.is_file() {
-            let text = std::fs::read_to_string(&path).map_err(|source| SceneError::Io {
-                path: path.clone(),
-                source,
-            })?;
+        if std::fs::symlink_metadata(&path).is_ok() {
+            // A file or a pipe, as any scene; a directory or a device is refused
+            // (`crate::input`).
+            let text = input::read_text(&input::Source::Path(path.clone()), "scene file")?;
             return Ok(Source {
                 name: path.display().to_string(),
                 dir: path.parent().map(Path::to_path_buf),
@@ -228,13 +228,13 @@ pub fn run(source: &Source, options: &Options) -> Result<Outcome, CheckError> {
     let settings = RenderSettings::merged(&[&scene.render, &layer]);
     let pool = build_pool(settings.threads).map_err(|e| CheckError::Render {
         scene: source.name.clone(),
-        source: e,
+        error: e,
     })?;
     let render = |scene: Arc<scene::Scene>, settings: RenderSettings| {
         let mut r =
             Renderer::with_pool(scene, settings, pool.clone()).map_err(|e| CheckError::Render {
                 scene: source.name.clone(),
-                source: e,
+                error: e,
             })?;
         r.render(&AtomicBool::new(false), |_| true);
         Ok::<_, CheckError>(r)
