@@ -30,5 +30,6 @@ mod sampling_chi2;
 mod scene_errors;
 mod shard;
 mod smooth;
+mod special_files;
 mod tui_graphics;
 mod tui_preview;
