@@ -3,6 +3,7 @@
 
 pub mod builtin;
 mod camera;
+pub mod check;
 pub mod description;
 pub mod error;
 pub mod load;

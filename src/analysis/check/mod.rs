@@ -2,16 +2,8 @@
 //! states. The extreme scenes of `scenes/extreme/` (embedded, see [`extreme`]) are the default set;
 //! the tests in `tests/extreme_scenes.rs` run the same checks.
 //!
-//! ```toml
-//! [check]
-//! about = "cornell moved by (1e6, 1e6, 1e6)"   # one line for the table
-//! width = 48                # render size and samples for the check (default 32 x 24, 64 spp)
-//! height = 36
-//! spp = 256
-//! same_as = "cornell"       # renders the same image as this scene (per-pixel z-test)
-//! mean = 100                # image mean radiance, a number or [r, g, b] (z-test)
-//! range = [0.5, 1.0]        # every pixel's mean within [lo, hi], up to its noise
-//! ```
+//! The table's keys (`about`, `width`, `height`, `spp`, `same_as`, `mean`, `range`) are
+//! [`crate::scene::check`]'s: the scene format reads them, unknown keys refused.
 //!
 //! Every check also requires zero invalid (NaN or infinite) samples. `same_as` names a built-in
 //! scene, an extreme scene, or a file relative to the checked scene's directory; the reference is
@@ -20,14 +12,12 @@
 pub mod extreme;
 
 use crate::analysis::stats;
-use crate::checked::{de_count, de_dimension, Rgb};
 use crate::input;
 use crate::render::film::Film;
 use crate::render::{build_pool, RenderError, Renderer};
 use crate::sampling::SamplerKind;
 use crate::scene::{self, builtin, SceneError};
 use crate::settings::{RenderSettings, SettingsOverrides};
-use serde::de::{self, Deserializer};
 use serde::Deserialize;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -39,54 +29,13 @@ use std::time::{Duration, Instant};
 pub const DEFAULT_SIZE: (u32, u32) = (32, 24);
 pub const DEFAULT_SPP: u32 = 64;
 
-/// A scene's `[check]` table.
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CheckDesc {
-    pub about: Option<String>,
-    #[serde(default, deserialize_with = "de_dimension")]
-    pub width: Option<u32>,
-    #[serde(default, deserialize_with = "de_dimension")]
-    pub height: Option<u32>,
-    #[serde(default, deserialize_with = "de_check_spp")]
-    pub spp: Option<u32>,
-    pub same_as: Option<String>,
-    pub mean: Option<Rgb>,
-    pub range: Option<Range>,
-}
+pub use crate::scene::check::{CheckDesc, Range};
 
 /// The part of a scene file the check code reads; the rest is the scene's.
 #[derive(Default, Deserialize)]
 struct CheckFile {
     #[serde(default)]
     check: Option<CheckDesc>,
-}
-
-/// `[lo, hi]` with 0 <= lo <= hi, finite.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Range(pub f64, pub f64);
-
-impl<'de> Deserialize<'de> for Range {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let [lo, hi] = <[f64; 2]>::deserialize(d)?;
-        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
-            return Err(de::Error::custom(format!(
-                "range must be [lo, hi] with 0 <= lo <= hi, finite, got [{lo}, {hi}]"
-            )));
-        }
-        Ok(Range(lo, hi))
-    }
-}
-
-/// Variances need two samples per pixel.
-fn de_check_spp<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
-    let spp = de_count(d)?;
-    if spp.is_some_and(|s| s < 2) {
-        return Err(de::Error::custom(
-            "a check needs at least 2 samples per pixel (for the variance)",
-        ));
-    }
-    Ok(spp)
 }
 
 /// Scene text to check, with where it came from.
