@@ -13,6 +13,7 @@ mod cli;
 mod convergence;
 mod degenerate;
 mod determinism;
+mod docs;
 mod environment;
 mod extreme_files;
 mod extreme_scenes;
