@@ -82,7 +82,10 @@ fn model_scene(name: &str, model: &str, fetch: &str) -> Option<scene::Scene> {
     if !obj.is_file() {
         let why = match Command::new(manifest().join(fetch)).output() {
             Ok(out) if out.status.success() => String::new(),
-            Ok(out) => format!(": {}", String::from_utf8_lossy(&out.stderr).trim()),
+            Ok(out) => match String::from_utf8_lossy(&out.stderr).trim() {
+                "" => format!(" ({})", out.status),
+                said => format!(": {said}"),
+            },
             Err(e) => format!(": {e}"),
         };
         if !obj.is_file() {
