@@ -13,6 +13,7 @@ mod cli;
 mod convergence;
 mod degenerate;
 mod determinism;
+mod doc_text;
 mod docs;
 mod environment;
 mod extreme_files;
