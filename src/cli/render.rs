@@ -96,13 +96,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .flatten()
     {
         if film_file::is_film_path(path) {
-            check_dir_writable(path)?;
+            check_dir_writable(path, "a film")?;
         } else {
             output::check_writable(path)?;
         }
     }
     if let Some(path) = &args.error_map {
         error_map::check_format(path)?;
+        check_dir_writable(path, "the error map")?;
         if settings.spp < 2 {
             return Err(error_map::ErrorMapError::TooFewSamples.into());
         }
@@ -380,7 +381,8 @@ fn resume_settings(
 }
 
 /// A film's directory accepts a new file (probed as a save would write it).
-fn check_dir_writable(path: &Path) -> anyhow::Result<()> {
+/// Fail before rendering if `what` cannot be written at `path` (probed with a file beside it).
+fn check_dir_writable(path: &Path, what: &str) -> anyhow::Result<()> {
     if path.is_dir() {
         anyhow::bail!("{}: is a directory", path.display());
     }
@@ -391,7 +393,13 @@ fn check_dir_writable(path: &Path) -> anyhow::Result<()> {
     let probe = dir.join(format!(".ptui-probe.{}.tmp", std::process::id()));
     std::fs::File::create(&probe)
         .and_then(|_| std::fs::remove_file(&probe))
-        .with_context(|| format!("{}: cannot write a film there", path.display()))
+        .map_err(|e| {
+            anyhow::anyhow!(
+                "{}: cannot write {what} there: {}",
+                path.display(),
+                crate::input::os_reason(&e)
+            )
+        })
 }
 
 /// The end-of-render report: what was rendered, how fast, and what the scene build chose.

@@ -189,12 +189,29 @@ fn the_command_line_says_what_is_wrong_in_one_line() {
             )
         })
         .collect();
-    cases.push((
-        ["render", "cornell", "-o", "/nonexistent/dir/x.png"]
-            .map(String::from)
-            .to_vec(),
-        "cannot write: no such file or directory".into(),
-    ));
+    for (args, reason) in [
+        (
+            &["render", "cornell", "-o", "/nonexistent/dir/x.png"][..],
+            "cannot write: no such file or directory",
+        ),
+        (
+            &["render", "cornell", "-o", "/nonexistent/dir/x.film"],
+            "cannot write a film there: no such file or directory",
+        ),
+        (
+            &[
+                "render",
+                "cornell",
+                "--error-map",
+                "/nonexistent/e.png",
+                "-o",
+                "x.png",
+            ],
+            "cannot write the error map there: no such file or directory",
+        ),
+    ] {
+        cases.push((args.iter().map(|a| a.to_string()).collect(), reason.into()));
+    }
     for (args, reason) in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let o = ptui_in(dir.path(), &args, None);
