@@ -247,5 +247,6 @@ fn materials_converge_to_mitsuba() {
     common::assert_converges_to_mitsuba(
         scene::load("materials").expect("built-in"),
         "materials",
+        common::Length::Long,
     );
 }
