@@ -24,7 +24,7 @@
 //! - The lobe is chosen with probability proportional to (1 - T(cos_o)) s and T(cos_o) (1 - s),
 //!   s = mean(specular) / (mean(color) + mean(specular)).
 
-use super::microfacet::Distribution;
+use super::microfacet::{Distribution, Microfacet};
 use super::shading;
 use super::{fresnel, BsdfEval, BsdfSample};
 use crate::geometry::Normals;
@@ -32,7 +32,8 @@ use crate::math::quadrature::gauss_legendre;
 use crate::math::DVec3;
 use crate::sampling::warp;
 use std::f64::consts::FRAC_1_PI;
-use std::sync::Arc;
+use rayon::prelude::*;
+use std::sync::{Arc, Mutex};
 
 /// The number of cosines the rough coat's transmittance table holds (Mitsuba's
 /// `MI_ROUGH_TRANSMITTANCE_RES`).
@@ -71,12 +72,12 @@ impl Plastic {
         let (internal_reflectance, rough) = match rough {
             None => (fresnel::diffuse_reflectance(1.0 / ior), None),
             Some(distribution) => {
-                let (t, r_int) = rough_tables(&distribution, ior);
+                let (transmittance, r_int) = rough_tables(&distribution, ior);
                 (
                     r_int,
                     Some(RoughCoat {
                         distribution,
-                        transmittance: Arc::new(t),
+                        transmittance,
                     }),
                 )
             }
@@ -241,17 +242,54 @@ fn lerp_table(table: &[f64; TABLE_SIZE], x: f64) -> f64 {
 
 /// The rough coat's tables, as Mitsuba's `roughplastic::parameters_changed`: the transmittance
 /// from outside T(mu) at 64 cosines, and the internal reflectance, twice the mean over the same
-/// cosines of mu times the coat's albedo seen from inside (eta' = 1 / eta).
-fn rough_tables(d: &Distribution, ior: f64) -> ([f64; TABLE_SIZE], f64) {
-    let mut t = [0.0; TABLE_SIZE];
-    let mut r_int = 0.0;
-    for (i, ti) in t.iter_mut().enumerate() {
-        let mu = (i as f64 / (TABLE_SIZE - 1) as f64).max(1e-6);
-        let wi = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-        *ti = coat_integral(d, wi, ior, false);
-        r_int += coat_integral(d, wi, 1.0 / ior, true) * mu;
+/// cosines of mu times the coat's albedo seen from inside (eta' = 1 / eta). A million
+/// quadrature points: about 0.1 s on one core, so the 64 cosines run on rayon's threads and each
+/// (distribution, ior) is computed once per process (a model's dozens of plastics share a few
+/// coats, and the TUI rebuilds the scene on every edit).
+fn rough_tables(d: &Distribution, ior: f64) -> (Arc<[f64; TABLE_SIZE]>, f64) {
+    type Key = (bool, u64, u64, u64);
+    static CACHE: Mutex<Vec<(Key, Arc<[f64; TABLE_SIZE]>, f64)>> = Mutex::new(Vec::new());
+    /// Enough for any scene's distinct coats; past it a table is computed and not kept.
+    const KEPT: usize = 256;
+    let key = (
+        d.kind == Microfacet::Ggx,
+        d.alpha_u.to_bits(),
+        d.alpha_v.to_bits(),
+        ior.to_bits(),
+    );
+    let cached = |cache: &Vec<(Key, Arc<[f64; TABLE_SIZE]>, f64)>| {
+        cache
+            .iter()
+            .find(|(k, _, _)| *k == key)
+            .map(|(_, t, r)| (t.clone(), *r))
+    };
+    if let Some(hit) = CACHE.lock().ok().and_then(|c| cached(&c)) {
+        return hit;
     }
-    (t, 2.0 * r_int / TABLE_SIZE as f64)
+    let rows: Vec<(f64, f64)> = (0..TABLE_SIZE)
+        .into_par_iter()
+        .map(|i| {
+            let mu = (i as f64 / (TABLE_SIZE - 1) as f64).max(1e-6);
+            let wi = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+            (
+                coat_integral(d, wi, ior, false),
+                coat_integral(d, wi, 1.0 / ior, true) * mu,
+            )
+        })
+        .collect();
+    let mut t = [0.0; TABLE_SIZE];
+    for (ti, row) in t.iter_mut().zip(&rows) {
+        *ti = row.0;
+    }
+    // Summed in order, as the sequential loop did: the same bits whatever the threads.
+    let r_int = 2.0 * rows.iter().map(|r| r.1).sum::<f64>() / TABLE_SIZE as f64;
+    let t = Arc::new(t);
+    if let Ok(mut cache) = CACHE.lock() {
+        if cache.len() < KEPT {
+            cache.push((key, t.clone(), r_int));
+        }
+    }
+    (t, r_int)
 }
 
 /// Mitsuba's `eval_reflectance` (`reflect`) or `eval_transmittance`: the fraction of light
