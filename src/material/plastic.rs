@@ -33,7 +33,7 @@ use crate::math::DVec3;
 use crate::sampling::warp;
 use std::f64::consts::FRAC_1_PI;
 use rayon::prelude::*;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// The number of cosines the rough coat's transmittance table holds (Mitsuba's
 /// `MI_ROUGH_TRANSMITTANCE_RES`).
@@ -297,11 +297,16 @@ fn rough_tables(d: &Distribution, ior: f64) -> (Arc<[f64; TABLE_SIZE]>, f64) {
 /// by Gauss-Legendre quadrature over the visible-normal sample space (32 x 32 nodes for eta > 1,
 /// 128 x 128 below, where total internal reflection makes the integrand steep).
 fn coat_integral(d: &Distribution, wi: DVec3, eta: f64, reflect: bool) -> f64 {
-    let n = if eta > 1.0 { 32 } else { 128 };
-    let (nodes, weights) = gauss_legendre(n);
+    static COARSE: OnceLock<(Vec<f64>, Vec<f64>)> = OnceLock::new();
+    static FINE: OnceLock<(Vec<f64>, Vec<f64>)> = OnceLock::new();
+    let (nodes, weights) = if eta > 1.0 {
+        COARSE.get_or_init(|| gauss_legendre(32))
+    } else {
+        FINE.get_or_init(|| gauss_legendre(128))
+    };
     let mut sum = 0.0;
-    for (x, wx) in nodes.iter().zip(&weights) {
-        for (y, wy) in nodes.iter().zip(&weights) {
+    for (x, wx) in nodes.iter().zip(weights) {
+        for (y, wy) in nodes.iter().zip(weights) {
             let u = (0.5 * x + 0.5, 0.5 * y + 0.5);
             let m = d.sample_visible(wi, u);
             let dot = wi.dot(m);
