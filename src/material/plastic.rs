@@ -31,8 +31,8 @@ use crate::geometry::Normals;
 use crate::math::quadrature::gauss_legendre;
 use crate::math::DVec3;
 use crate::sampling::warp;
-use std::f64::consts::FRAC_1_PI;
 use rayon::prelude::*;
+use std::f64::consts::FRAC_1_PI;
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// The number of cosines the rough coat's transmittance table holds (Mitsuba's

@@ -139,8 +139,7 @@ fn materials_match_mitsuba() {
 #[ignore = "deep: 1024 spp against the reference"]
 fn veach_converges_to_mitsuba() {
     let scene = Arc::new(scene::load("veach").expect("built-in"));
-    let reference =
-        reference::load(&refs().join("veach.exr")).unwrap_or_else(|e| panic!("{e}"));
+    let reference = reference::load(&refs().join("veach.exr")).unwrap_or_else(|e| panic!("{e}"));
     let summary = refs().join("veach.txt");
     let ref_noise = common::summary_value(&summary, "noise_rmse")[0];
     let (w, h) = (reference.width, reference.height);
@@ -172,7 +171,9 @@ fn veach_converges_to_mitsuba() {
             let rmse = reference::rmse(&img, &ref_kept);
             let sd = ptui::analysis::stats::rmse_relative_sd(&img, &ref_kept);
             let ours = (rmse * rmse - ref_noise * ref_noise).max(1e-12).sqrt();
-            eprintln!("{spp:5} spp: rmse {rmse:.5} (less the reference's noise {ours:.5}, sd {sd:.3})");
+            eprintln!(
+                "{spp:5} spp: rmse {rmse:.5} (less the reference's noise {ours:.5}, sd {sd:.3})"
+            );
             points.push((spp as f64, ours, sd));
         }
     }
@@ -182,9 +183,18 @@ fn veach_converges_to_mitsuba() {
     )
     .expect("four checkpoints");
     eprintln!("slope {:.3}", fit.slope);
-    assert!((fit.slope + 0.5).abs() < 0.05, "slope {:.3}, expected -0.5", fit.slope);
+    assert!(
+        (fit.slope + 0.5).abs() < 0.05,
+        "slope {:.3}, expected -0.5",
+        fit.slope
+    );
     // Each checkpoint on the line C / sqrt(spp) within 3 standard deviations of its RMSE (or 5%).
-    let c = (points.iter().map(|p| p.1.ln() + 0.5 * p.0.ln()).sum::<f64>() / 4.0).exp();
+    let c = (points
+        .iter()
+        .map(|p| p.1.ln() + 0.5 * p.0.ln())
+        .sum::<f64>()
+        / 4.0)
+        .exp();
     for (spp, ours, sd) in &points {
         let predicted = c / spp.sqrt();
         let tolerance = (3.0 * sd).max(0.05);
@@ -198,7 +208,12 @@ fn veach_converges_to_mitsuba() {
     let ref_means = reference.channel_means();
     for c in 0..3 {
         let rel = means[c] / ref_means[c] - 1.0;
-        eprintln!("channel {c}: {:.5} vs {:.5} ({:+.3}%)", means[c], ref_means[c], 100.0 * rel);
+        eprintln!(
+            "channel {c}: {:.5} vs {:.5} ({:+.3}%)",
+            means[c],
+            ref_means[c],
+            100.0 * rel
+        );
         assert!(rel.abs() < 0.005, "channel {c}: {rel:+.4}");
     }
 }
