@@ -220,7 +220,7 @@ impl Plastic {
                 if dh > 0.0 && g > 0.0 {
                     let f = fresnel::dielectric(wo.dot(h), self.ior).reflectance;
                     f_cos += self.specular * (f * dh * g / (4.0 * wo.z));
-                    pdf += p_spec * dh * g1_o / (4.0 * wo.z);
+                    pdf += p_spec * dh * d.g1_visible(wo, h) / (4.0 * wo.z);
                 }
             }
         }
