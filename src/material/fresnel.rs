@@ -49,7 +49,13 @@ pub fn conductor(cos_i: f64, eta: DVec3, k: DVec3) -> DVec3 {
         let r_s = (term1 - term2) / (term1 + term2);
         let term3 = a2pb2 * cos2 + sin4;
         let term4 = term2 * sin2;
-        let r_p = r_s * (term3 - term4) / (term3 + term4);
+        // Both vanish only at normal incidence on eta = k = 0, where the polarisations agree
+        // (0 / 0 made the reflectance NaN there).
+        let r_p = if term3 + term4 > 0.0 {
+            r_s * (term3 - term4) / (term3 + term4)
+        } else {
+            r_s
+        };
         0.5 * (r_s + r_p)
     };
     DVec3::new(one(eta.x, k.x), one(eta.y, k.y), one(eta.z, k.z))
@@ -157,6 +163,14 @@ mod tests {
             }
         }
         assert_eq!(conductor(0.3, DVec3::ZERO, DVec3::ONE), DVec3::ONE);
+        // eta = k = 0 (a scene may say so) reflects everything, normal incidence included.
+        for cos in [0.0, 0.5, 1.0] {
+            assert_eq!(
+                conductor(cos, DVec3::ZERO, DVec3::ZERO),
+                DVec3::ONE,
+                "cos {cos}"
+            );
+        }
         // Gold at normal incidence, from eta and k: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
         let (n, k) = (0.2, 3.0);
         let want = ((n - 1.0f64).powi(2) + k * k) / ((n + 1.0f64).powi(2) + k * k);
