@@ -1,6 +1,7 @@
 //! Exact Fresnel reflectance for unpolarised light: of a dielectric interface, of a conductor
 //! (a complex index of refraction), and the fitted hemispherical average plastic needs.
 
+use crate::math::quadrature::gauss_legendre;
 use crate::math::DVec3;
 
 /// Result of [`dielectric`]: the reflectance and the cosine of the refracted direction.
@@ -76,6 +77,27 @@ pub fn diffuse_reflectance(eta: f64) -> f64 {
     }
 }
 
+/// The exact hemispherical average of [`dielectric`]'s reflectance, 2 int_0^1 F(mu, eta) mu dmu,
+/// for relative index `eta`: total internal reflection (F = 1) below the critical cosine, and
+/// Gauss-Legendre quadrature above it in s, mu^2 = t_c + (1 - t_c) s^2, which turns F's
+/// square-root edge there (and at grazing incidence) into a smooth function of s.
+pub fn hemispherical_reflectance(eta: f64) -> f64 {
+    // mu_c^2 = 1 - eta^2 below 1, none (0) from the less dense side.
+    let t_c = (1.0 - eta * eta).max(0.0);
+    let (nodes, weights) = gauss_legendre(48);
+    let above: f64 = nodes
+        .iter()
+        .zip(&weights)
+        .map(|(x, w)| {
+            let s = 0.5 * (x + 1.0);
+            let mu = (t_c + (1.0 - t_c) * s * s).sqrt();
+            // dt = 2 (1 - t_c) s ds, ds = dx / 2.
+            dielectric(mu, eta).reflectance * (1.0 - t_c) * s * w
+        })
+        .sum();
+    t_c + above
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -144,6 +166,29 @@ mod tests {
                 (fit - sum).abs() < 0.006 * sum.max(0.05),
                 "eta {eta}: fit {fit} vs {sum}"
             );
+        }
+    }
+
+    /// The quadrature against the midpoint rule on 200,000 nodes in mu^2, and against the
+    /// identity 1 - R(1 / eta) = (1 - R(eta)) / eta^2 (the light a hemisphere sends through
+    /// an interface, seen from either side, differs only by the compression of solid angle).
+    #[test]
+    fn hemispherical_reflectance_is_the_integral() {
+        for eta in [1.0001, 1.1, 1.49, 2.0, 3.0, 10.0] {
+            for e in [eta, 1.0 / eta] {
+                let n = 200_000;
+                let midpoint: f64 = (0..n)
+                    .map(|i| dielectric(((i as f64 + 0.5) / n as f64).sqrt(), e).reflectance)
+                    .sum::<f64>()
+                    / n as f64;
+                let r = hemispherical_reflectance(e);
+                assert!((r - midpoint).abs() < 1e-6, "eta {e}: {r} vs {midpoint}");
+            }
+            let (out, inside) = (
+                hemispherical_reflectance(eta),
+                hemispherical_reflectance(1.0 / eta),
+            );
+            assert!(((1.0 - inside) - (1.0 - out) / (eta * eta)).abs() < 1e-9);
         }
     }
 

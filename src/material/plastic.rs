@@ -18,8 +18,9 @@
 //!   of 1 minus the rough coat's directional albedo over 64 cosines, computed at scene build
 //!   by the same Gauss-Legendre quadrature as Mitsuba's `eval_transmittance`) and R_int the
 //!   light the coat sends back down, averaged over the hemisphere (smooth: the fitted
-//!   `fresnel::diffuse_reflectance(1 / eta)`; rough: Mitsuba's mean over the same 64
-//!   cosines). 1 / (1 - R_int) sums the base's bounces under the coat with the base's colour
+//!   `fresnel::diffuse_reflectance(1 / eta)` up to `FITTED_MAX_IOR`, the exact average
+//!   beyond, where the fit fails and Mitsuba's plastic creates energy; rough: Mitsuba's mean
+//!   over the same 64 cosines). 1 / (1 - R_int) sums the base's bounces under the coat with the base's colour
 //!   left out of the series (`nonlinear = false`).
 //! - The lobe is chosen with probability proportional to (1 - T(cos_o)) s and T(cos_o) (1 - s),
 //!   s = mean(specular) / (mean(color) + mean(specular)).
@@ -69,7 +70,7 @@ impl Plastic {
         let s_mean = specular.element_sum() / 3.0;
         let specular_weight = s_mean / (color_mean + s_mean);
         let (internal_reflectance, rough) = match rough {
-            None => (fresnel::diffuse_reflectance(1.0 / ior), None),
+            None => (smooth_internal_reflectance(ior), None),
             Some(distribution) => {
                 let (t, r_int) = rough_tables(&distribution, ior);
                 (
@@ -225,6 +226,22 @@ impl Plastic {
             }
         }
         BsdfEval { f_cos, pdf }
+    }
+}
+
+/// Coats up to this index take Mitsuba's fitted internal reflectance, within 0.2% of the exact
+/// one there; beyond it the fit fails (4% off at 2.5, where plastic of colour 1 reflected 3.5%
+/// more light than it received; above 1 from 3.9 on, where the base's reflectance turned
+/// negative), so the exact average is used.
+pub const FITTED_MAX_IOR: f64 = 2.0;
+
+/// The smooth coat's internal reflectance R_int: the light it sends back down, averaged over the
+/// hemisphere below (relative index 1 / ior).
+fn smooth_internal_reflectance(ior: f64) -> f64 {
+    if ior <= FITTED_MAX_IOR {
+        fresnel::diffuse_reflectance(1.0 / ior)
+    } else {
+        fresnel::hemispherical_reflectance(1.0 / ior)
     }
 }
 
