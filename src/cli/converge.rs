@@ -290,11 +290,11 @@ fn summarise(
                     let _ = writeln!(
                         out,
                         "equal time ({t:.2} s): {} {n} / {} {n} = {ratio:.3} \
-                         (at 1/sqrt(t), {} needs {:.1}x the time for {}'s error)",
+                         (at 1/sqrt(t), {} needs {}x the time for {}'s error)",
                         other.label(),
                         base.label(),
                         other.label(),
-                        ratio * ratio,
+                        two_digits(ratio * ratio),
                         base.label(),
                         n = m.name(),
                     );
@@ -303,4 +303,28 @@ fn summarise(
         }
     }
     out
+}
+
+/// A positive ratio to two significant digits at least (0.00014, 0.012, 0.8, 14.3): a fixed
+/// number of decimals printed the ratio of MIS over light sampling on veach as 0.0.
+fn two_digits(x: f64) -> String {
+    if x > 0.0 && x < 0.1 {
+        let decimals = (-x.log10()).floor() as usize + 2;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.1}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::two_digits;
+
+    #[test]
+    fn ratios_keep_two_significant_digits() {
+        assert_eq!(two_digits(0.000144), "0.00014");
+        assert_eq!(two_digits(0.0123), "0.012");
+        assert_eq!(two_digits(0.8), "0.8");
+        assert_eq!(two_digits(14.26), "14.3");
+    }
 }

@@ -40,11 +40,10 @@ const MAX_HEADER: u32 = 1 << 20;
 
 #[derive(Debug, thiserror::Error)]
 pub enum FilmFileError {
-    #[error("{}: {source}", .path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    #[error("{}: {reason}", .path.display())]
+    Io { path: PathBuf, reason: String },
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
     #[error("{}: not a ptui film file ({why})", .path.display())]
     NotAFilm { path: PathBuf, why: String },
     #[error("{}: film format version {found}, this ptui reads version {FORMAT_VERSION}", .path.display())]
@@ -365,6 +364,7 @@ impl FilmHeader {
 /// preceded by its path as written and its length), so a changed OBJ beside an unchanged
 /// scene file is another scene. `spec` is what `ptui render` takes: a file, else a built-in.
 pub fn scene_hash(spec: &str) -> Result<String, String> {
+    use crate::scene::load::{scene_text, SceneText};
     let path = Path::new(spec);
     let (src, base) = if path.is_file() && crate::scene::model::is_model(path) {
         let name = path
@@ -372,13 +372,21 @@ pub fn scene_hash(spec: &str) -> Result<String, String> {
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
         let src = crate::scene::model::scene_text(path, &name)?;
         (src, path.parent().map(Path::to_path_buf))
-    } else if path.is_file() {
-        let src = std::fs::read_to_string(path).map_err(|e| format!("{spec}: {e}"))?;
-        (src, path.parent().map(Path::to_path_buf))
-    } else if let Some(src) = crate::scene::builtin::get(spec) {
-        (src.to_string(), None)
     } else {
-        return Err(format!("{spec}: no such scene file or built-in scene"));
+        match scene_text(spec).map_err(|e| e.to_string())? {
+            // A film names its scene to load it again: a pipe cannot be read twice.
+            SceneText::Read { base_dir: None, .. } => {
+                return Err(format!(
+                    "{spec}: a film needs its scene in a file (it is read again to resume or \
+                     merge), not a pipe or standard input"
+                ))
+            }
+            SceneText::Read {
+                text,
+                base_dir: Some(base),
+            } => (text, Some(base)),
+            SceneText::Builtin(src) => (src.to_string(), None),
+        }
     };
     let mut h = Sha256::new();
     h.update((src.len() as u64).to_le_bytes());
@@ -390,7 +398,9 @@ pub fn scene_hash(spec: &str) -> Result<String, String> {
                 Some(b) => b.join(p.get_ref()),
                 None => PathBuf::from(p.get_ref()),
             };
-            let bytes = std::fs::read(&full).map_err(|e| format!("{}: {e}", full.display()))?;
+            let source = crate::input::Source::Path(full);
+            let bytes = crate::input::read(&source, "OBJ file", crate::input::Content::Binary)
+                .map_err(|e| e.to_string())?;
             h.update((p.get_ref().len() as u64).to_le_bytes());
             h.update(p.get_ref().as_bytes());
             h.update((bytes.len() as u64).to_le_bytes());
@@ -473,9 +483,9 @@ pub fn write(
     film: &Film,
     map: Option<&SampleMap>,
 ) -> Result<(), FilmFileError> {
-    let io = |source| FilmFileError::Io {
+    let io = |e: std::io::Error| FilmFileError::Io {
         path: path.to_path_buf(),
-        source,
+        reason: crate::input::os_reason(&e),
     };
     let mut header = header.clone();
     header.map_start = map.map(SampleMap::start);
@@ -506,7 +516,7 @@ pub fn write(
         inner.flush()
     })
     .map_err(|e| match e {
-        crate::io::output::OutputError::Io { source, .. } => io(source),
+        crate::io::output::OutputError::Io { error, .. } => io(error),
         other => io(std::io::Error::other(other.to_string())),
     })
 }
@@ -521,9 +531,13 @@ pub struct FilmReader {
 /// Open `path` and read its header, checking the magic, version and the file's size.
 pub fn open(path: &Path) -> Result<FilmReader, FilmFileError> {
     let p = || path.to_path_buf();
-    let io = |source| FilmFileError::Io { path: p(), source };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let len = file.metadata().map_err(io)?.len();
+    let io = |e: std::io::Error| FilmFileError::Io {
+        path: p(),
+        reason: crate::input::os_reason(&e),
+    };
+    // A regular file only (its length is checked against the header): a directory, a device or
+    // a pipe is refused before anything is read.
+    let (file, len) = crate::input::open_regular(path, "film file")?;
     let mut reader = CrcRead {
         inner: BufReader::with_capacity(1 << 20, file),
         crc: crc32fast::Hasher::new(),
@@ -590,10 +604,10 @@ pub fn open(path: &Path) -> Result<FilmReader, FilmFileError> {
 }
 
 impl FilmReader {
-    fn io(&self, source: std::io::Error) -> FilmFileError {
+    fn io(&self, e: std::io::Error) -> FilmFileError {
         FilmFileError::Io {
             path: self.path.clone(),
-            source,
+            reason: crate::input::os_reason(&e),
         }
     }
 

@@ -58,9 +58,8 @@ pub struct SceneDesc {
     pub environment: Option<Spanned<EnvironmentDesc>>,
     #[serde(default)]
     pub sphere: Vec<SphereDesc>,
-    /// What `ptui check` expects of this scene: read by the check code from the same text;
-    /// a scene only holds it.
-    pub check: Option<toml::Table>,
+    /// What `ptui check` expects of this scene (`scene::check`); a scene only holds it.
+    pub check: Option<super::check::CheckDesc>,
     /// Accelerator: auto (default), flat or bvh (see `accel`).
     pub accel: Option<crate::accel::AccelChoice>,
     #[serde(default)]

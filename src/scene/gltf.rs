@@ -1,7 +1,7 @@
 //! glTF 2.0 models (`.gltf` with its `.bin` and image files, or one `.glb`), read with the
 //! `gltf` crate: every triangle mesh of the default scene (else the first) placed by its nodes'
 //! transforms, with normals and `TEXCOORD_0`, its materials mapped to ptui's (`gltf_material`),
-//! and the first perspective camera. Buffers and images are read through `crate::files` and
+//! and the first perspective camera. Buffers and images are read through `crate::input` and
 //! decoded by `texture::load`, so they meet the same limits as every input; each accessor is
 //! checked against its buffer before it is read, and a NaN or an index out of range is an
 //! error naming the file and the accessor. Nothing is half-loaded: the model is whole or an
@@ -64,7 +64,7 @@ pub fn load(
     progress: Option<&Progress>,
 ) -> Result<(Mesh, Model), String> {
     let shown = path.display().to_string();
-    let bytes = crate::files::read(path, "glTF file")?;
+    let bytes = crate::input::read_path(path, "glTF file", crate::input::Content::Binary)?;
     if let Some(p) = progress {
         p.start(format!("reading {shown}"), 0);
     }
@@ -249,7 +249,7 @@ fn read_buffers(
 fn read_uri(
     uri: &str,
     dir: &Path,
-    what: &str,
+    what: &'static str,
     files: &mut Vec<PathBuf>,
 ) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
@@ -264,7 +264,7 @@ fn read_uri(
         return Err(format!("`{uri}` is not a file beside the model"));
     }
     let path = dir.join(percent_decode(uri));
-    let bytes = crate::files::read(&path, what)?;
+    let bytes = crate::input::read_path(&path, what, crate::input::Content::Binary)?;
     files.push(path);
     Ok(bytes)
 }
@@ -324,7 +324,7 @@ fn read_images(
                         .ok_or_else(|| format!("{name}: its buffer view lies outside its buffer"))?
                         .to_vec(),
                 };
-                let budget = crate::files::size_limit().saturating_sub(cache.bytes);
+                let budget = crate::input::size_limit().saturating_sub(cache.bytes);
                 let image = crate::texture::load::decode(&bytes, &name, budget)?;
                 cache.insert(
                     PathBuf::from(format!("{shown}#image{}", img.index())),

@@ -13,6 +13,7 @@ use crate::accel::{camera_probe, Accel, AccelChoice};
 use crate::geometry::torus_knot::TorusKnot;
 use crate::geometry::{Primitive, Shape};
 use crate::geometry::{Sphere, Triangle};
+use crate::input::{self, Source};
 use crate::light::{sphere::SphereLight, triangle::TriangleLight, Light, Lights};
 use crate::material::Material;
 use crate::math::DVec3;
@@ -37,36 +38,64 @@ pub struct BuildOptions {
     pub progress: Option<Arc<Progress>>,
 }
 
-/// Load a scene from a file path or a built-in name (a file of that name wins).
+/// Load a scene from a file path, `-` (standard input) or a built-in name (a file of that name
+/// wins).
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
     load_with(spec, &BuildOptions::default())
 }
 
-/// [`load`] with build options; a scene file's folder becomes the base of its mesh paths.
+/// [`load`] with build options; a scene file's folder becomes the base of its mesh paths (for a
+/// pipe or standard input, the current directory).
 pub fn load_with(spec: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
     let path = Path::new(spec);
+    // A model is named in the scene made for it and read again there: a file, not a pipe.
     if path.is_file() && super::model::is_model(path) {
         return load_model(path, spec, options);
     }
-    if path.is_file() {
-        let src = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let options = BuildOptions {
-            base_dir: Some(path.parent().map_or_else(PathBuf::new, Path::to_path_buf)),
-            ..options.clone()
-        };
-        return load_str_with(&src, spec, &options);
+    match scene_text(spec)? {
+        SceneText::Read { text, base_dir } => {
+            let options = BuildOptions {
+                base_dir: base_dir.or_else(|| options.base_dir.clone()),
+                ..options.clone()
+            };
+            // Errors name the file as given, standard input as such.
+            load_str_with(&text, &Source::from_arg(spec).name(), &options)
+        }
+        SceneText::Builtin(src) => load_str_with(src, spec, options),
     }
-    if path.exists() {
-        return Err(SceneError::Io {
-            path: path.to_path_buf(),
-            source: std::io::Error::other("is a directory, not a scene file"),
-        });
+}
+
+/// A scene's text: read from a file or a pipe (with the folder its relative paths start from),
+/// or built in.
+pub enum SceneText {
+    Read {
+        text: String,
+        /// The scene file's folder; `None` for a pipe or standard input.
+        base_dir: Option<PathBuf>,
+    },
+    Builtin(&'static str),
+}
+
+/// The text `spec` names: `-` is standard input, an existing path is read (through
+/// [`crate::input`]: a file or a pipe, nothing else), anything else a built-in name.
+pub fn scene_text(spec: &str) -> Result<SceneText, SceneError> {
+    let source = Source::from_arg(spec);
+    let exists = match &source {
+        Source::Path(path) => std::fs::symlink_metadata(path).is_ok(),
+        Source::Stdin => true,
+    };
+    if exists {
+        let text = input::read_text(&source, "scene file")?;
+        let base_dir = match &source {
+            Source::Path(path) if path.is_file() => {
+                Some(path.parent().map_or_else(PathBuf::new, Path::to_path_buf))
+            }
+            _ => None,
+        };
+        return Ok(SceneText::Read { text, base_dir });
     }
     match builtin::get(spec) {
-        Some(src) => load_str_with(src, spec, options),
+        Some(src) => Ok(SceneText::Builtin(src)),
         None => Err(SceneError::NotFound {
             spec: spec.to_string(),
             builtins: builtin::names().join(", "),
@@ -508,7 +537,7 @@ fn mtl_materials(
     for (written, line) in &mesh.material_libs {
         for path in super::mtl::library_paths(obj, written) {
             let shown = path.display().to_string();
-            let bytes = match crate::files::read(&path, "MTL file") {
+            let bytes = match input::read_path(&path, "MTL file", input::Content::Text) {
                 Ok(bytes) => bytes,
                 Err(e) => {
                     b.warnings.push(format!(

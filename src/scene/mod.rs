@@ -3,6 +3,7 @@
 
 pub mod builtin;
 mod camera;
+pub mod check;
 pub mod description;
 pub mod error;
 pub mod gltf;
@@ -45,13 +46,13 @@ pub const BUILD_BYTES_PER_TRIANGLE: u64 = 512;
 /// The text says which bound it is, with the numbers, for the error.
 pub fn mesh_triangle_room(so_far: u64) -> (u64, String) {
     let by_index = MAX_MESH_TRIANGLES.saturating_sub(so_far);
-    match crate::settings::available_memory() {
+    match crate::memory::available() {
         Some(avail) if avail / BUILD_BYTES_PER_TRIANGLE < MAX_MESH_TRIANGLES => (
             (avail / BUILD_BYTES_PER_TRIANGLE).saturating_sub(so_far),
             format!(
                 "at about {BUILD_BYTES_PER_TRIANGLE} bytes a triangle for the triangles and their \
                  BVH, the {} of memory available hold {} mesh triangles per scene",
-                crate::settings::human_bytes(avail),
+                crate::memory::human_bytes(avail),
                 avail / BUILD_BYTES_PER_TRIANGLE
             ),
         ),

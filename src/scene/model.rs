@@ -114,7 +114,8 @@ fn outline(path: &Path) -> Result<Outline, String> {
     // Emitters: a `Ke` above zero (or a `map_Ke`) in one of its libraries.
     let emits = data.material_libs.iter().any(|(written, _)| {
         super::mtl::library_paths(path, written).iter().any(|lib| {
-            let Ok(bytes) = crate::files::read(lib, "MTL file") else {
+            let Ok(bytes) = crate::input::read_path(lib, "MTL file", crate::input::Content::Text)
+            else {
                 return false;
             };
             super::mtl::parse(&bytes, "").is_ok_and(|l| {

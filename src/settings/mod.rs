@@ -315,14 +315,14 @@ impl RenderSettings {
             }
         }
         let need = self.width as u64 * self.height as u64 * BYTES_PER_PIXEL;
-        if let Some(avail) = available_memory() {
+        if let Some(avail) = crate::memory::available() {
             if need > avail {
                 return Err(format!(
                     "a {}x{} film needs {} of memory but only {} is available",
                     self.width,
                     self.height,
-                    human_bytes(need),
-                    human_bytes(avail)
+                    crate::memory::human_bytes(need),
+                    crate::memory::human_bytes(avail)
                 ));
             }
         }
@@ -331,29 +331,6 @@ impl RenderSettings {
 
     pub fn pixels(&self) -> usize {
         self.width as usize * self.height as usize
-    }
-}
-
-/// MemAvailable from /proc/meminfo, where there is one.
-pub fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
-pub fn human_bytes(b: u64) -> String {
-    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
-    let mut v = b as f64;
-    let mut unit = 0;
-    while v >= 1024.0 && unit + 1 < UNITS.len() {
-        v /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{b} B")
-    } else {
-        format!("{v:.1} {}", UNITS[unit])
     }
 }
 

@@ -90,7 +90,7 @@ pub struct Cache {
 }
 
 impl Cache {
-    /// The image at `path` (read through [`crate::files::read`] and decoded on first use).
+    /// The image at `path` (read through [`crate::input::read_path`] and decoded on first use).
     pub fn get(&mut self, path: &Path, progress: Option<&Progress>) -> Result<Arc<Image>, String> {
         let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
         if let Some(img) = self.images.get(&key) {
@@ -99,8 +99,8 @@ impl Cache {
         if let Some(p) = progress {
             p.start(format!("decoding {}", path.display()), 0);
         }
-        let bytes = crate::files::read(path, "texture")?;
-        let budget = crate::files::size_limit().saturating_sub(self.bytes);
+        let bytes = crate::input::read_path(path, "texture", crate::input::Content::Binary)?;
+        let budget = crate::input::size_limit().saturating_sub(self.bytes);
         let img = Arc::new(decode(&bytes, &path.display().to_string(), budget)?);
         self.bytes += img.bytes() as u64;
         self.files.push(path.to_path_buf());

@@ -219,7 +219,7 @@ fn draw_status(frame: &mut Frame, app: &App, area: Rect) {
         Layout::vertical([Constraint::Length(1), Constraint::Length(1)]).areas(area);
     let width = area.width as usize;
     if let Some(snap) = &app.snapshot {
-        let err = if snap.error.rmse.is_finite() {
+        let err = if snap.error.is_known() {
             format!(
                 " · est. error {:.4} (rel {:.3})",
                 snap.error.rmse,
@@ -398,7 +398,8 @@ fn draw_chart(frame: &mut Frame, app: &App, area: Rect) {
 const HELP: &[(&str, &str)] = &[
     ("Tab / Shift-Tab", "select a form field"),
     ("Enter", "edit the field, or cycle one with a few values"),
-    ("", "(integrator, hemisphere, sampler, tonemap, colour)"),
+    // The fields that cycle, from `Field::cycling` (so the list cannot drift from the code).
+    ("", CYCLING),
     (
         "integrator",
         "painterly shows its hemisphere, correl(ation),",
@@ -422,24 +423,36 @@ const HELP: &[(&str, &str)] = &[
     ("q / Esc / Ctrl-C", "quit"),
 ];
 
+/// Where [`HELP`] lists the fields that cycle (wrapped: it may take two lines).
+const CYCLING: &str = "{the fields that cycle}";
+
 fn draw_help(frame: &mut Frame, area: Rect) {
+    // The list of fields that cycle, wrapped to the popup (its key column is 18 wide).
+    let cycling = wrap_words(&format!("({})", Field::cycling()), 48);
+    let lines: Vec<Line> = HELP
+        .iter()
+        .flat_map(|&(k, what)| {
+            let texts = if what == CYCLING {
+                cycling.clone()
+            } else {
+                vec![what.to_string()]
+            };
+            texts.into_iter().map(move |text| {
+                Line::from(vec![
+                    Span::styled(format!(" {k:<17}"), Style::new().bold().yellow()),
+                    Span::raw(text),
+                ])
+            })
+        })
+        .collect();
     let w = 70.min(area.width);
-    let h = (HELP.len() as u16 + 2).min(area.height);
+    let h = (lines.len() as u16 + 2).min(area.height);
     let popup = Rect::new(
         area.x + (area.width - w) / 2,
         area.y + (area.height - h) / 2,
         w,
         h,
     );
-    let lines: Vec<Line> = HELP
-        .iter()
-        .map(|(k, what)| {
-            Line::from(vec![
-                Span::styled(format!(" {k:<17}"), Style::new().bold().yellow()),
-                Span::raw(*what),
-            ])
-        })
-        .collect();
     frame.render_widget(Clear, popup);
     frame.render_widget(
         Paragraph::new(lines).block(

@@ -103,9 +103,9 @@ fn a_textured_obj_renders_as_mitsuba_renders_it() {
 /// The same at 1024 samples per pixel, the error falling like 1/sqrt(spp) down to the
 /// reference's noise (`common::assert_converges_to`).
 #[test]
-#[ignore = "deep: 1024 spp against the Mitsuba reference (~20 s)"]
+#[ignore = "deep tier: cargo test --release -- --ignored"]
 fn a_textured_obj_converges_to_mitsuba() {
-    common::assert_converges_to_mitsuba(load("room.toml"), "textured-room");
+    common::assert_converges_to_mitsuba(load("room.toml"), "textured-room", common::Length::Long);
 }
 
 /// The scene as a glTF binary (node transforms placing the wall and the box, textures in the
