@@ -80,6 +80,16 @@ impl Glossy {
     }
 }
 
+/// A parameter as a summary shows it: four decimals (an alpha from an MTL's `Ns` has sixteen).
+fn short(x: f64) -> String {
+    let r = (x * 1e4).round() / 1e4;
+    if r == 0.0 && x != 0.0 {
+        format!("{x:.1e}")
+    } else {
+        r.to_string()
+    }
+}
+
 impl MaterialKind {
     /// The name a scene file gives this material, with its roughness where it has one: what
     /// the summaries list.
@@ -90,9 +100,9 @@ impl MaterialKind {
                 Microfacet::Beckmann => " beckmann",
             };
             if d.alpha_u == d.alpha_v {
-                format!(" (alpha {}{kind})", d.alpha_u)
+                format!(" (alpha {}{kind})", short(d.alpha_u))
             } else {
-                format!(" (alpha {}x{}{kind})", d.alpha_u, d.alpha_v)
+                format!(" (alpha {}x{}{kind})", short(d.alpha_u), short(d.alpha_v))
             }
         };
         match self {
@@ -108,7 +118,7 @@ impl MaterialKind {
                 }
                 Glossy::MetallicRoughness(m) => format!(
                     "metallic-roughness (metallic {}{})",
-                    m.metallic,
+                    short(m.metallic),
                     alpha(&m.distribution).replace(" (", ", ").replace(')', "")
                 ),
             },

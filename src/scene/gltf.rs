@@ -101,7 +101,13 @@ fn read_model(
         .extensions_used()
         .filter(|e| !KNOWN.contains(e) && *e != "KHR_lights_punctual")
         .collect();
-    if let Some(e) = doc.extensions_required().find(|e| !KNOWN.contains(e)) {
+    // Blender's exporter lists KHR_lights_punctual as required when the scene has lamps; the
+    // model without them is still the model (its geometry and materials are whole), so it loads
+    // and the summary says the lights were skipped.
+    if let Some(e) = doc
+        .extensions_required()
+        .find(|e| !KNOWN.contains(e) && *e != "KHR_lights_punctual")
+    {
         return Err(format!(
             "{shown}: requires the extension {e}, which ptui does not read"
         ));
