@@ -358,3 +358,40 @@ pub fn within<T: Send + 'static>(
 
 /// The fuzzers' limit for one case (load, and render 4x3 or 8x6 pixels).
 pub const CASE_LIMIT: std::time::Duration = std::time::Duration::from_secs(20);
+
+/// Whether `file`, a model taken from a package registry, is in place: if it is missing, `fetch`
+/// (a script of the checkout's that takes it from the registry and checks its checksums) is run.
+/// If that fails (no registry reachable), the test fails when `PTUI_REQUIRE_MODELS` names `model`
+/// (CI sets it) and otherwise says SKIPPED on the terminal, past the test harness's capture, with
+/// the command that fetches the model; `false` then.
+pub fn fetched(file: &Path, model: &str, fetch: &str, test: &str) -> bool {
+    use std::io::Write;
+    if file.is_file() {
+        return true;
+    }
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let why = match std::process::Command::new(root.join(fetch)).output() {
+        Ok(out) if out.status.success() => String::new(),
+        Ok(out) => match String::from_utf8_lossy(&out.stderr).trim() {
+            "" => format!(" ({})", out.status),
+            said => format!(": {said}"),
+        },
+        Err(e) => format!(": {e}"),
+    };
+    if file.is_file() {
+        return true;
+    }
+    let message = format!(
+        "{} is missing and `{fetch}` could not fetch it{why}",
+        file.display()
+    );
+    let required = std::env::var("PTUI_REQUIRE_MODELS").unwrap_or_default();
+    assert!(!required.split(',').any(|m| m == model), "{message}");
+    // Straight to the terminal: libtest keeps a passing test's own output to itself.
+    let _ = writeln!(
+        std::io::stderr().lock(),
+        "\nSKIPPED {test}: {message}\n  run `{fetch}` (it needs the package registry it names), \
+         then the test again\n"
+    );
+    false
+}

@@ -16,6 +16,7 @@ mod degenerate;
 mod determinism;
 mod doc_text;
 mod docs;
+mod downloaded_models;
 mod environment;
 mod extreme_files;
 mod extreme_scenes;

@@ -9,9 +9,7 @@
 use crate::common::{self, Length};
 
 use ptui::scene::{self, BuildOptions};
-use std::io::Write;
 use std::path::PathBuf;
-use std::process::Command;
 
 fn manifest() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -71,38 +69,13 @@ fn bunny(name: &str, length: Length) {
     }
 }
 
-/// `scenes/<name>.toml`, whose mesh is `scenes/models/<model>.obj`. A missing model is fetched
-/// by `fetch`, a script of the checkout's that takes it from a package registry and checks its
-/// checksum. If that fails (no registry reachable), the test fails when `PTUI_REQUIRE_MODELS`
-/// names the model (CI sets it) and otherwise says SKIPPED on the terminal, past the test
-/// harness's capture, with the command that fetches the model.
+/// `scenes/<name>.toml`, whose mesh is `scenes/models/<model>.obj`, fetched by `fetch` when
+/// missing (`common::fetched`); `None` (the test skipped, said so) where it cannot be.
 fn model_scene(name: &str, model: &str, fetch: &str) -> Option<scene::Scene> {
     let scenes = manifest().join("scenes");
     let obj = scenes.join(format!("models/{model}.obj"));
-    if !obj.is_file() {
-        let why = match Command::new(manifest().join(fetch)).output() {
-            Ok(out) if out.status.success() => String::new(),
-            Ok(out) => match String::from_utf8_lossy(&out.stderr).trim() {
-                "" => format!(" ({})", out.status),
-                said => format!(": {said}"),
-            },
-            Err(e) => format!(": {e}"),
-        };
-        if !obj.is_file() {
-            let message = format!(
-                "{} is missing and `{fetch}` could not fetch it{why}",
-                obj.display()
-            );
-            let required = std::env::var("PTUI_REQUIRE_MODELS").unwrap_or_default();
-            assert!(!required.split(',').any(|m| m == model), "{message}");
-            // Straight to the terminal: libtest keeps a passing test's own output to itself.
-            let _ = writeln!(
-                std::io::stderr().lock(),
-                "\nSKIPPED reference_mesh ({name}): {message}\n  run `{fetch}` (it needs npm \
-                 and the npm registry), then the test again\n"
-            );
-            return None;
-        }
+    if !common::fetched(&obj, model, fetch, &format!("reference_mesh ({name})")) {
+        return None;
     }
     let file = scenes.join(format!("{name}.toml"));
     let src = std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
