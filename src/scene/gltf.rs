@@ -19,7 +19,7 @@
 use super::gltf_material::{self, Materials};
 use super::mesh::Mesh;
 use crate::math::DVec3;
-use crate::progress::Progress;
+use crate::progress::{tick, Progress};
 use crate::texture::load::Cache;
 use base64::Engine;
 use glam::{DMat3, DMat4};
@@ -120,54 +120,58 @@ fn read_model(
     }
     let buffers = read_buffers(doc, gltf.blob.as_deref(), dir, &shown, &mut model.files)?;
     let mut mesh = Mesh::default();
-    let scene = doc.default_scene().or_else(|| doc.scenes().next());
-    let Some(scene) = scene else {
-        return Err(format!("{shown}: has no scene"));
-    };
+    if let Some(p) = progress {
+        // The triangles the scene's nodes place (a mesh used by two nodes counts twice), for a
+        // bar that moves as they are read.
+        let mut total = 0u64;
+        walk_nodes(doc, &shown, |node, _| {
+            for prim in node.mesh().iter().flat_map(|m| m.primitives()) {
+                let corners = prim
+                    .indices()
+                    .or_else(|| prim.get(&gltf::Semantic::Positions));
+                total += corners.map_or(0, |a| a.count() as u64 / 3);
+            }
+            Ok(())
+        })?;
+        p.start(format!("reading {shown}"), total);
+    }
     let mut lights = 0usize;
-    let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
-    let mut visited = 0usize;
-    while let Some((node, parent)) = stack.pop() {
-        visited += 1;
-        if visited > doc.nodes().len() * 4 + 16 {
-            return Err(format!("{shown}: its nodes form a cycle"));
-        }
-        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
-        let world = parent * local;
-        if !world.is_finite() {
-            return Err(format!(
-                "{shown}: node {} has a transform that is not finite",
-                node.index()
-            ));
-        }
+    walk_nodes(doc, &shown, |node, world| {
         if let (Some(camera), None) = (node.camera(), model.camera) {
             if let gltf::camera::Projection::Perspective(p) = camera.projection() {
                 model.camera = camera_node(world, p.yfov() as f64);
             }
         }
         lights += usize::from(node.light().is_some());
-        if let Some(m) = node.mesh() {
-            for prim in m.primitives() {
-                if prim.mode() != Mode::Triangles {
-                    warnings.push(format!(
-                        "{shown}: mesh {} has a primitive of mode {:?}, skipped (only triangles)",
-                        m.index(),
-                        prim.mode()
-                    ));
-                    continue;
-                }
-                let default = doc.materials().len() as u32;
-                add_primitive(&mut mesh, &prim, world, &buffers, &shown, smooth, default)?;
-                if mesh.triangles.len() as u64 > limit {
-                    return Err(format!(
-                        "{shown}: has more than {limit} triangles, {}",
-                        super::obj::NO_ROOM
-                    ));
-                }
+        let Some(m) = node.mesh() else {
+            return Ok(());
+        };
+        for prim in m.primitives() {
+            if prim.mode() != Mode::Triangles {
+                warnings.push(format!(
+                    "{shown}: mesh {} has a primitive of mode {:?}, skipped (only triangles)",
+                    m.index(),
+                    prim.mode()
+                ));
+                continue;
+            }
+            let read = Read {
+                buffers: &buffers,
+                shown: &shown,
+                smooth,
+                default_material: doc.materials().len() as u32,
+                progress,
+            };
+            add_primitive(&mut mesh, &prim, world, &read)?;
+            if mesh.triangles.len() as u64 > limit {
+                return Err(format!(
+                    "{shown}: has more than {limit} triangles, {}",
+                    super::obj::NO_ROOM
+                ));
             }
         }
-        stack.extend(node.children().map(|c| (c, world)));
-    }
+        Ok(())
+    })?;
     if mesh.triangles.is_empty() {
         return Err(format!("{shown}: its scene has no triangles"));
     }
@@ -200,8 +204,40 @@ fn read_model(
     Ok((mesh, model))
 }
 
+/// Visits the nodes of the default scene (else the first) with their world transforms, each
+/// after its parent; an error for nodes that form a cycle or a transform that is not finite.
+pub(super) fn walk_nodes(
+    doc: &gltf::Document,
+    shown: &str,
+    mut visit: impl FnMut(&gltf::Node, DMat4) -> Result<(), String>,
+) -> Result<(), String> {
+    let scene = doc.default_scene().or_else(|| doc.scenes().next());
+    let Some(scene) = scene else {
+        return Err(format!("{shown}: has no scene"));
+    };
+    let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
+    let mut visited = 0usize;
+    while let Some((node, parent)) = stack.pop() {
+        visited += 1;
+        if visited > doc.nodes().len() * 4 + 16 {
+            return Err(format!("{shown}: its nodes form a cycle"));
+        }
+        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(format!(
+                "{shown}: node {} has a transform that is not finite",
+                node.index()
+            ));
+        }
+        visit(&node, world)?;
+        stack.extend(node.children().map(|c| (c, world)));
+    }
+    Ok(())
+}
+
 /// The camera of a node: it looks along its local -z with +y up.
-fn camera_node(world: DMat4, yfov: f64) -> Option<CameraNode> {
+pub(super) fn camera_node(world: DMat4, yfov: f64) -> Option<CameraNode> {
     let position = world.transform_point3(glam::DVec3::ZERO);
     let forward = world
         .transform_vector3(glam::DVec3::NEG_Z)
@@ -386,17 +422,34 @@ fn check_accessor(
     }
 }
 
+/// What reading a primitive needs besides the primitive.
+struct Read<'a> {
+    buffers: &'a [Vec<u8>],
+    shown: &'a str,
+    smooth: Option<bool>,
+    /// The material of a primitive without one: the specification's default, after the file's.
+    default_material: u32,
+    progress: Option<&'a Progress>,
+}
+
+/// How many triangles are placed between two ticks of the progress bar.
+const TICK: usize = 1 << 16;
+
 /// A primitive's triangles, placed by `world`, appended to `mesh`.
 fn add_primitive(
     mesh: &mut Mesh,
     prim: &gltf::Primitive,
     world: DMat4,
-    buffers: &[Vec<u8>],
-    shown: &str,
-    smooth: Option<bool>,
-    default_material: u32,
+    read: &Read,
 ) -> Result<(), String> {
     use gltf::Semantic;
+    let Read {
+        buffers,
+        shown,
+        smooth,
+        default_material,
+        progress,
+    } = *read;
     let fail = |a: &gltf::Accessor, e: String| format!("{shown}: accessor {}: {e}", a.index());
     let float3 = [Dimensions::Vec3];
     let pos_acc = prim
@@ -500,7 +553,10 @@ fn add_primitive(
         let p = positions[i as usize].map(f64::from);
         DVec3::from(world.transform_point3(glam::DVec3::from_array(p)))
     };
-    for t in indices.chunks_exact(3) {
+    for (k, t) in indices.chunks_exact(3).enumerate() {
+        if k % TICK == TICK - 1 {
+            tick(progress, TICK as u64);
+        }
         let mut t = [t[0], t[1], t[2]];
         if flip {
             t.swap(1, 2);

@@ -8,6 +8,7 @@ pub mod description;
 pub mod error;
 pub mod gltf;
 pub mod gltf_material;
+pub mod gltf_outline;
 pub mod load;
 pub mod materials;
 pub mod mesh;

@@ -95,6 +95,15 @@ fn outline(path: &Path) -> Result<Outline, String> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     if matches!(ext.as_deref(), Some("gltf" | "glb")) {
+        if let Some(o) = super::gltf_outline::outline(path) {
+            return Ok(Outline {
+                min: o.min,
+                max: o.max,
+                camera: o.camera,
+                emits: o.emits,
+            });
+        }
+        // The document does not say: the model read whole (which names what is wrong with it).
         let mut cache = crate::texture::load::Cache::default();
         let (mesh, model) = super::gltf::load(path, u64::MAX, None, &mut cache, None)?;
         let (min, max) = bounds(mesh.triangles.iter().flat_map(|t| t.p()));
