@@ -12,9 +12,10 @@
 pub mod panics;
 
 use crate::io::film_file::{self, FilmHeader};
+use crate::progress::Progress;
 use crate::render::film::{ErrorEstimate, MeanImage};
 use crate::render::{PassOutcome, RenderError, RenderStats, Renderer};
-use crate::scene::{self, Scene};
+use crate::scene::{self, BuildOptions, Scene};
 use crate::settings::{RenderSettings, SettingsOverrides};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -25,6 +26,9 @@ use std::time::{Duration, Instant};
 
 /// Nice value of the render threads: the UI thread (nice 0) always gets the CPU first.
 const RENDER_NICE: i32 = 10;
+
+/// How often a scene load's progress is sent: a few times a second is enough for a gauge.
+const LOAD_POLL: Duration = Duration::from_millis(150);
 
 /// What to render: a scene (file or built-in name) and the settings layers above the scene's
 /// own `[render]` table (see [`RenderSettings::resolve`]).
@@ -98,6 +102,15 @@ pub enum SessionEvent {
         threads: usize,
     },
     Progress(Arc<Snapshot>),
+    /// How far the scene being loaded has got (a large model takes seconds): the stage (reading
+    /// the file, decoding a texture, building the BVH), its total and the units done (a total
+    /// of 0: no count). Sent a few times a second while a load lasts; `Started` or `Failed`
+    /// ends it.
+    Loading {
+        stage: String,
+        total: u64,
+        done: u64,
+    },
     /// A request could not start (scene error, invalid settings); the previous render goes on.
     Failed {
         request: u64,
@@ -350,13 +363,35 @@ impl Worker {
         true
     }
 
+    /// `scene::load_with` on a thread of its own, its progress sent as `Loading` events every
+    /// [`LOAD_POLL`] meanwhile (the sink is this thread's).
+    fn load_scene(&self, spec: &str) -> Result<Scene, scene::SceneError> {
+        let progress = Arc::new(Progress::default());
+        let options = BuildOptions {
+            progress: Some(progress.clone()),
+            ..Default::default()
+        };
+        std::thread::scope(|s| {
+            let load = s.spawn(|| scene::load_with(spec, &options));
+            while !load.is_finished() {
+                std::thread::sleep(LOAD_POLL);
+                let (stage, total, done) = progress.snapshot();
+                if !stage.is_empty() && !load.is_finished() {
+                    self.send(SessionEvent::Loading { stage, total, done });
+                }
+            }
+            load.join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        })
+    }
+
     /// Load the scene if it changed, merge the settings, and either go on with the current film
     /// (only the stopping rule or display settings changed) or start a new one.
     fn start(&mut self, req: &Request) -> Result<(), String> {
         let scene = match &self.scene {
             Some((spec, s)) if *spec == req.scene => s.clone(),
             _ => {
-                let s = Arc::new(scene::load(&req.scene).map_err(|e| e.to_string())?);
+                let s = Arc::new(self.load_scene(&req.scene).map_err(|e| e.to_string())?);
                 self.scene = Some((req.scene.clone(), s.clone()));
                 s
             }
@@ -594,6 +629,40 @@ mod tests {
                 Err(e) => panic!("no {want:?} snapshot: {e}"),
             }
         }
+    }
+
+    /// A scene that takes a while to build (a knot of 524,288 triangles: about half a second
+    /// for its BVH) is reported as it loads: `Loading` events, each with a stage, before the
+    /// render starts, and none after.
+    #[test]
+    fn a_slow_scene_load_reports_its_stages() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("knot.toml");
+        std::fs::write(
+            &path,
+            "[camera]\nposition = [0, 0, 6]\n[environment]\ncolor = 1\n[[mesh]]\n\
+             torus_knot = { p = 2, q = 3, segments = 2048, sides = 128, tube = 0.3 }\n",
+        )
+        .unwrap();
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        let mut req = request(1, 1, IntegratorKind::Path);
+        req.scene = path.to_string_lossy().into_owned();
+        worker.send(Command::Start(req));
+        let mut stages = Vec::new();
+        loop {
+            match rx.recv_timeout(Duration::from_secs(120)) {
+                Ok(SessionEvent::Loading { stage, .. }) => stages.push(stage),
+                Ok(SessionEvent::Started { .. }) => break,
+                Ok(SessionEvent::Failed { message, .. }) => panic!("{message}"),
+                Ok(_) => {}
+                Err(e) => panic!("no start: {e}"),
+            }
+        }
+        assert!(!stages.is_empty(), "no Loading event before the start");
+        assert!(stages.iter().all(|s| !s.is_empty()), "{stages:?}");
+        until(&rx, JobStatus::Done);
+        worker.shutdown();
     }
 
     #[test]

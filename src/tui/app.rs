@@ -48,6 +48,8 @@ pub struct App {
     pub scene: Option<Arc<Scene>>,
     pub threads: usize,
     pub snapshot: Option<Arc<Snapshot>>,
+    /// The scene load under way (stage, total, done), until its render starts or fails.
+    pub loading: Option<(String, u64, u64)>,
     /// A snapshot received but not yet turned into preview colours (done once per frame).
     pending: Option<Arc<Snapshot>>,
     pub color_mode: ColorMode,
@@ -113,6 +115,7 @@ impl App {
             message: None,
             worker_panic: None,
             fatal: None,
+            loading: None,
             accepted: None,
             next_request: 0,
             quit: false,
@@ -240,6 +243,7 @@ impl App {
                 threads,
                 ..
             } => {
+                self.loading = None;
                 self.scene = Some(scene);
                 self.scene_render = scene_render;
                 self.scene_name = scene_name;
@@ -280,7 +284,11 @@ impl App {
                     self.pending = Some(snap);
                 }
             }
+            SessionEvent::Loading { stage, total, done } => {
+                self.loading = Some((stage, total, done));
+            }
             SessionEvent::Failed { request, message } => {
+                self.loading = None;
                 if self.accepted.is_none() && self.snapshot.is_none() {
                     self.fatal = Some(message);
                     self.quit = true;

@@ -178,6 +178,22 @@ fn mean_spp(snap: &Snapshot) -> String {
 }
 
 fn draw_gauge(frame: &mut Frame, app: &App, area: Rect) {
+    if let Some((stage, total, done)) = &app.loading {
+        // A scene loading: its stage, with a count where the stage has one.
+        let (ratio, label) = match *total {
+            0 => (0.0, format!("loading: {stage}…")),
+            t => {
+                let r = (*done as f64 / t as f64).clamp(0.0, 1.0);
+                (r, format!("loading: {stage}  {:.0}%", 100.0 * r))
+            }
+        };
+        let gauge = Gauge::default()
+            .ratio(ratio)
+            .label(Span::styled(label, Style::new().white().bold()))
+            .gauge_style(Style::new().fg(Color::Cyan).bg(Color::Black));
+        frame.render_widget(gauge, area);
+        return;
+    }
     let Some(snap) = &app.snapshot else {
         frame.render_widget(Line::from(" waiting for the first pass…").dark_gray(), area);
         return;
@@ -779,6 +795,25 @@ mod tests {
                     .collect()
             })
             .collect()
+    }
+
+    /// While a scene loads, the gauge row shows the stage and how far it has got.
+    #[test]
+    fn the_gauge_shows_a_scene_load() {
+        let mut app = app(120, 40);
+        let gauge_row = |t: &Terminal<TestBackend>| -> String {
+            let buf = t.backend().buffer();
+            let y = buf.area.height - 3;
+            (0..buf.area.width).map(|x| buf[(x, y)].symbol()).collect()
+        };
+        app.loading = Some(("reading big.glb".into(), 200, 50));
+        let row = gauge_row(&render(&app));
+        assert!(row.contains("loading: reading big.glb  25%"), "{row}");
+        app.loading = Some(("decoding big.glb: image 0".into(), 0, 0));
+        let row = gauge_row(&render(&app));
+        assert!(row.contains("loading: decoding big.glb: image 0…"), "{row}");
+        app.loading = None;
+        assert!(!gauge_row(&render(&app)).contains("loading"));
     }
 
     #[test]
