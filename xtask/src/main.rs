@@ -11,6 +11,7 @@ mod error_breakdown;
 mod export_mesh;
 mod gen_extreme;
 mod gen_spheres_field;
+mod large_model;
 mod obvhs_side;
 mod probe_limits;
 mod sky_map;
@@ -73,6 +74,9 @@ enum Task {
     /// Write each `[[mesh]]` of a scene file as ptui places it (its triangles and shading
     /// normals) to DIR/mesh<i>.ply, for the Mitsuba reference harness (harness/mitsuba_mesh.py).
     ExportMeshes { scene: PathBuf, dir: PathBuf },
+    /// A large textured .glb from a real one (subdivided, its texture enlarged): the load
+    /// benchmark's model (benches/HISTORY.md).
+    LargeModel(large_model::Args),
     /// A terminal capture with colour escapes (`tmux capture-pane -p -e`) to a PNG.
     AnsiToPng {
         capture: PathBuf,
@@ -107,6 +111,7 @@ fn main() -> anyhow::Result<()> {
         } => error_breakdown::run(&image, &reference, heat.as_deref()),
         Task::SkyMap { out } => sky_map::run(&out),
         Task::ExportMeshes { scene, dir } => export_mesh::run(&scene, &dir),
+        Task::LargeModel(args) => large_model::run(&args),
         Task::AnsiToPng { capture, out, font } => ansi_to_png::run(&capture, &out, font.as_deref()),
     }
 }
