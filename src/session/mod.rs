@@ -137,6 +137,9 @@ pub struct BuildNotes {
     /// The materials the objects use (`BuildReport::materials`).
     pub materials: String,
     pub build_time: std::time::Duration,
+    /// What the build skipped or added that the user may want to know (`BuildReport::warnings`:
+    /// a model's lights skipped, the sky added to a bare model, MTL statements not used).
+    pub warnings: Vec<String>,
 }
 
 impl BuildNotes {
@@ -168,6 +171,11 @@ impl BuildNotes {
                 "sky map".to_string()
             } else {
                 String::new()
+            },
+            match self.warnings.len() {
+                0 => String::new(),
+                1 => "1 warning (i)".to_string(),
+                n => format!("{n} warnings (i)"),
             },
         ];
         let parts: Vec<String> = parts.into_iter().filter(|p| !p.is_empty()).collect();
@@ -447,6 +455,7 @@ impl Worker {
                 environment: scene.report.environment.clone(),
                 materials: scene.report.materials.clone(),
                 build_time: scene.report.build_time,
+                warnings: scene.report.warnings.clone(),
             },
             threads: job.renderer.threads(),
         });

@@ -559,6 +559,9 @@ fn draw_details(frame: &mut Frame, app: &App, area: Rect) {
     if !app.notes.materials.is_empty() {
         rows.push(("materials", app.notes.materials.clone()));
     }
+    for w in &app.notes.warnings {
+        rows.push(("warning", w.clone()));
+    }
     let colours = match (app.color_mode, app.form.color) {
         (super::color::ColorMode::Truecolor, _) => "truecolor".to_string(),
         (_, super::color::ColorChoice::Auto) => COLOR_HINTS[0].to_string(),
@@ -631,6 +634,7 @@ mod tests {
             environment: "black".into(),
             materials: "diffuse x6, mirror, glass, emitter".into(),
             build_time: Duration::from_micros(400),
+            warnings: Vec::new(),
         }
     }
 
@@ -882,8 +886,12 @@ mod tests {
                 .into(),
             materials: String::new(),
             build_time: Duration::ZERO,
+            warnings: vec!["head.glb: 3 KHR_lights_punctual light(s) skipped".into()],
         };
-        assert_eq!(bvh.short(), "BVH, 1200 objects · none · sky map");
+        assert_eq!(
+            bvh.short(),
+            "BVH, 1200 objects · none · sky map · 1 warning (i)"
+        );
     }
 
     #[test]
