@@ -46,17 +46,20 @@ pub fn load(spec: &str) -> Result<Scene, SceneError> {
 
 /// [`load`] with build options; a scene file's folder becomes the base of its mesh paths.
 pub fn load_with(spec: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
+    let (src, _) = read_source(spec)?;
+    load_text(spec, &src, options)
+}
+
+/// The text of the scene `spec` names: the file of that path, else the built-in scene of that
+/// name (a file wins), and the file's path (None for a built-in).
+pub fn read_source(spec: &str) -> Result<(String, Option<PathBuf>), SceneError> {
     let path = Path::new(spec);
     if path.is_file() {
         let src = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        let options = BuildOptions {
-            base_dir: Some(path.parent().map_or_else(PathBuf::new, Path::to_path_buf)),
-            ..options.clone()
-        };
-        return load_str_with(&src, spec, &options);
+        return Ok((src, Some(path.to_path_buf())));
     }
     if path.exists() {
         return Err(SceneError::Io {
@@ -65,12 +68,29 @@ pub fn load_with(spec: &str, options: &BuildOptions) -> Result<Scene, SceneError
         });
     }
     match builtin::get(spec) {
-        Some(src) => load_str_with(src, spec, options),
+        Some(src) => Ok((src.to_string(), None)),
         None => Err(SceneError::NotFound {
             spec: spec.to_string(),
             builtins: builtin::names().join(", "),
         }),
     }
+}
+
+/// Build the scene `spec` names from `src`, its text (as read, or as edited in the TUI): paths
+/// in it are relative to the folder of the file `spec` names, if it names one.
+pub fn load_text(spec: &str, src: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
+    let options = BuildOptions {
+        base_dir: base_dir(spec).or_else(|| options.base_dir.clone()),
+        ..options.clone()
+    };
+    load_str_with(src, spec, &options)
+}
+
+/// The folder relative paths in the scene file `spec` start from (None for a built-in).
+pub fn base_dir(spec: &str) -> Option<PathBuf> {
+    let path = Path::new(spec);
+    path.is_file()
+        .then(|| path.parent().map_or_else(PathBuf::new, Path::to_path_buf))
 }
 
 /// Parse and build a scene from TOML text; `file` names it in errors.

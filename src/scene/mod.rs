@@ -4,6 +4,7 @@
 pub mod builtin;
 mod camera;
 pub mod description;
+pub mod edit;
 pub mod error;
 pub mod load;
 pub mod mesh;
