@@ -6,8 +6,10 @@ use super::description::{MaterialDesc, MaterialName, MeshDesc, SceneDesc};
 use super::mesh::{self, Transform};
 use super::mesh_triangle_room;
 use super::sky::build_sky;
-use super::{builtin, BuildReport, Scene, SceneError};
-use crate::accel::{camera_probe, Accel, AccelChoice};
+use super::{builtin, BuildReport, Scene, SceneError, SceneObject};
+use crate::accel::flat::FlatScan;
+use crate::accel::{auto_choice, camera_probe, Accel, AccelChoice, BVH_CROSSOVER};
+use crate::camera::Camera;
 use crate::geometry::torus_knot::TorusKnot;
 use crate::geometry::{Primitive, Shape};
 use crate::geometry::{Sphere, Triangle};
@@ -137,9 +139,27 @@ struct Builder<'a> {
     /// is flat.
     shading: Vec<[[f32; 3]; 3]>,
     warnings: Vec<String>,
+    objects: Vec<SceneObject>,
 }
 
 impl Builder<'_> {
+    /// Record that object `index` of `table` became the primitives from `first` on.
+    fn object(
+        &mut self,
+        table: &'static str,
+        index: usize,
+        name: &Option<Spanned<String>>,
+        first: usize,
+    ) {
+        self.objects.push(SceneObject {
+            table,
+            index,
+            name: name.as_ref().map(|n| n.get_ref().clone()),
+            first: first as u32,
+            count: (self.prims.len() - first) as u32,
+        });
+    }
+
     fn err(&self, span: Option<Range<usize>>, field: String, msg: impl Into<String>) -> SceneError {
         SceneError::at(self.file, self.src, span, Some(field), msg)
     }
@@ -214,13 +234,16 @@ fn build(
         mesh_triangles: 0,
         shading: Vec::new(),
         warnings: Vec::new(),
+        objects: Vec::new(),
     };
     for (i, s) in desc.sphere.iter().enumerate() {
         let object = format!("sphere[{i}]");
         b.name(&s.name, &object)?;
         let material = b.material(&s.material(), &object, false)?;
         let sphere = Sphere::new(DVec3::from_array(s.center.0), s.radius.0);
+        let first = b.prims.len();
         b.add([Shape::Sphere(sphere)], material);
+        b.object("sphere", i, &s.name, first);
     }
     for (i, t) in desc.triangle.iter().enumerate() {
         let object = format!("triangle[{i}]");
@@ -235,7 +258,9 @@ fn build(
             ));
         }
         let material = b.material(&t.material(), &object, true)?;
+        let first = b.prims.len();
         b.add([Shape::Triangle(tri)], material);
+        b.object("triangle", i, &t.name, first);
     }
     for (i, q) in desc.quad.iter().enumerate() {
         let object = format!("quad[{i}]");
@@ -257,7 +282,9 @@ fn build(
             ));
         }
         let material = b.material(&q.material(), &object, true)?;
+        let first = b.prims.len();
         b.add([Shape::Triangle(t1), Shape::Triangle(t2)], material);
+        b.object("quad", i, &q.name, first);
     }
     for (i, m) in desc.mesh.iter().enumerate() {
         let object = format!("mesh[{i}]");
@@ -266,6 +293,7 @@ fn build(
         let material = b.material(&m.material(), &object, true)?;
         let first = b.prims.len();
         b.add(mesh.triangles.into_iter().map(Shape::Triangle), material);
+        b.object("mesh", i, &m.name, first);
         if mesh.normals.iter().any(Option::is_some) {
             b.shading.resize(first, [[0.0; 3]; 3]);
             b.shading
@@ -280,18 +308,13 @@ fn build(
         lights,
         mut shading,
         warnings,
+        objects,
         ..
     } = b;
     if !shading.is_empty() {
         shading.resize(prims.len(), [[0.0; 3]; 3]);
     }
-    let choice = options.accel.or(desc.accel).unwrap_or_default();
-    // Probe with the camera's rays at the image's aspect ratio: 32 rows are plenty to tell
-    // boxes that separate the objects from boxes that do not, at a cost of microseconds.
-    let size = RenderSettings::merged(&[&desc.render]);
-    let nx = ((32 * size.width) / size.height.max(1)).clamp(1, 128);
-    let probe = camera_probe(&camera, nx, 32);
-    let (accel, why) = Accel::build(choice, &prims, &probe, options.progress.as_deref());
+    let (accel, accel_text) = choose_accel(desc, &camera, &prims, options, None);
     let camera = focus_camera(camera, desc, &accel, &prims, src, file)?;
     let lights = Lights::new(clip_sphere_lights(lights, &prims));
     let no_emitters = lights.is_empty();
@@ -314,7 +337,7 @@ fn build(
         );
     }
     let report = BuildReport {
-        accel: format!("{} ({why})", accel.describe(prims.len())),
+        accel: accel_text,
         light_sampling,
         environment: sky.text,
         build_time: started.elapsed(),
@@ -323,11 +346,12 @@ fn build(
     Ok(Scene {
         name: file.to_string(),
         camera,
-        prims,
+        prims: prims.into(),
         materials,
         lights,
         accel,
-        shading,
+        shading: shading.into(),
+        objects,
         background: sky.background,
         env_select: match (&sky.environment, no_emitters) {
             (None, _) => 0.0,
@@ -341,6 +365,53 @@ fn build(
         render: desc.render.clone(),
         report,
     })
+}
+
+/// The accelerator the scene's `accel` (or the build options') asks for over `prims`, and the
+/// report's text for it. `auto`'s choice depends on the camera (whether the BVH tests fewer
+/// primitives than the flat scan for its rays): `reuse`, an accelerator built over the same
+/// primitives for another camera, is kept where the choice comes out the same, so a camera move
+/// does not build a BVH again; the result is the accelerator a build from scratch gives.
+pub(super) fn choose_accel(
+    desc: &SceneDesc,
+    camera: &Camera,
+    prims: &[Primitive],
+    options: &BuildOptions,
+    reuse: Option<&Arc<Accel>>,
+) -> (Arc<Accel>, String) {
+    let choice = options.accel.or(desc.accel).unwrap_or_default();
+    // Probe with the camera's rays at the image's aspect ratio: 32 rows are plenty to tell
+    // boxes that separate the objects from boxes that do not, at a cost of microseconds.
+    let size = RenderSettings::merged(&[&desc.render]);
+    let nx = ((32 * size.width) / size.height.max(1)).clamp(1, 128);
+    let probe = camera_probe(camera, nx, 32);
+    let text = |accel: &Accel, why: String| format!("{} ({why})", accel.describe(prims.len()));
+    if let Some(prev) = reuse {
+        match (choice, &**prev) {
+            (AccelChoice::Auto, Accel::Bvh(bvh)) if prims.len() >= BVH_CROSSOVER => {
+                let (keep, why) = auto_choice(bvh, prims.len(), &probe);
+                if keep {
+                    return (prev.clone(), text(prev, why));
+                }
+                let flat = Accel::Flat(FlatScan::new(prims));
+                let text = text(&flat, why);
+                return (Arc::new(flat), text);
+            }
+            // Forced, or below the crossover: the camera does not enter into it.
+            (AccelChoice::Flat | AccelChoice::Bvh, _) => {
+                return (prev.clone(), text(prev, "forced".into()))
+            }
+            (AccelChoice::Auto, Accel::Flat(_)) if prims.len() < BVH_CROSSOVER => {
+                let why = format!("auto: below the measured crossover of {BVH_CROSSOVER}");
+                return (prev.clone(), text(prev, why));
+            }
+            // A flat scan chosen for another camera: this one's rays may favour a BVH.
+            _ => {}
+        }
+    }
+    let (accel, why) = Accel::build(choice, prims, &probe, options.progress.as_deref());
+    let text = text(&accel, why);
+    (Arc::new(accel), text)
 }
 
 /// Sphere lights cut by other spheres' surfaces learn the cuts, so light sampling can leave out
@@ -480,7 +551,7 @@ fn sidedness(lights: &Lights) -> String {
     parts.join(", ")
 }
 
-fn build_material(
+pub(super) fn build_material(
     m: &MaterialDesc,
     src: &str,
     file: &str,
@@ -545,7 +616,7 @@ fn build_material(
 /// A `[render]` size whose film cannot fit in the available memory is an error of the scene file,
 /// reported at its `width` (or `height`) with the memory it would need. Every other setting was
 /// range-checked as it was read.
-fn check_render_size(desc: &SceneDesc, src: &str, file: &str) -> Result<(), SceneError> {
+pub(super) fn check_render_size(desc: &SceneDesc, src: &str, file: &str) -> Result<(), SceneError> {
     let r = &desc.render;
     if r.width.is_none() && r.height.is_none() {
         return Ok(());

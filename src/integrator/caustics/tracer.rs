@@ -82,7 +82,7 @@ impl CausticTracer {
             return Err("none (no emitters)".into());
         }
         let mut targets = Vec::new();
-        for p in &scene.prims {
+        for p in scene.prims.iter() {
             if !scene.materials[p.material as usize].is_delta() {
                 continue;
             }
