@@ -402,6 +402,44 @@ fn value_text(doc: &DocumentMut, key: &KeyPath) -> Option<String> {
     Some(v.to_string().trim().to_string())
 }
 
+/// `src`, the text of the scene `spec` names, with the relative paths of its meshes and map made
+/// absolute, so that the text read from another folder (a copy beside a film) loads the same
+/// files.
+pub fn standalone(spec: &str, src: &str) -> Result<String, SceneError> {
+    let mut doc = parse_doc(spec, src)?;
+    let Some(base) = super::load::base_dir(spec) else {
+        return Ok(src.to_string());
+    };
+    let base = std::path::absolute(&base).unwrap_or(base);
+    let absolute = |item: &mut Item| {
+        let Some(v) = item.as_value_mut() else { return };
+        let Some(p) = v.as_str().map(Path::new) else {
+            return;
+        };
+        if p.is_relative() && p.to_str() != Some(super::sky::BUILTIN_SKY) {
+            let full = base.join(p).to_string_lossy().into_owned();
+            let decor = v.decor().clone();
+            *v = Value::from(full);
+            *v.decor_mut() = decor;
+        }
+    };
+    if let Some(meshes) = doc.get_mut("mesh").and_then(Item::as_array_of_tables_mut) {
+        for m in meshes.iter_mut() {
+            if let Some(item) = m.get_mut("path") {
+                absolute(item);
+            }
+        }
+    }
+    if let Some(item) = doc
+        .get_mut("environment")
+        .and_then(Item::as_table_like_mut)
+        .and_then(|t| t.get_mut("map"))
+    {
+        absolute(item);
+    }
+    Ok(doc.to_string())
+}
+
 /// A number as the file should read it: a whole number without a fraction, otherwise rounded
 /// to 6 significant digits (what the TUI renders is what is written, so nothing is lost that
 /// the image shows).
@@ -578,6 +616,29 @@ mod tests {
             (b.target(), b.dirty()),
             (PathBuf::from("cornell.toml"), false)
         );
+    }
+
+    #[test]
+    fn a_standalone_copy_names_its_files_by_absolute_paths() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.toml");
+        let src = "[environment]\nmap = \"sky.exr\" # the sky\n[[mesh]]\npath = \"m/a.obj\"\n[[mesh]]\npath = \"/abs/b.obj\"\n";
+        std::fs::write(&path, src).unwrap();
+        let out = standalone(path.to_str().unwrap(), src).unwrap();
+        let base = std::path::absolute(dir.path()).unwrap();
+        let want = src
+            .replace(
+                "\"sky.exr\"",
+                &format!("{:?}", base.join("sky.exr").to_str().unwrap()),
+            )
+            .replace(
+                "\"m/a.obj\"",
+                &format!("{:?}", base.join("m/a.obj").to_str().unwrap()),
+            );
+        assert_eq!(out, want);
+        // A built-in scene has no files of its own.
+        let sky = crate::scene::builtin::get("sky").unwrap();
+        assert_eq!(standalone("sky", sky).unwrap(), sky);
     }
 
     #[test]

@@ -9,13 +9,17 @@
 //! its threads are joined (`install` returns only when every task has), and the worker takes the
 //! newest command.
 
+mod film;
 pub mod panics;
+mod source;
 
-use crate::io::film_file::{self, FilmHeader};
 use crate::render::film::{ErrorEstimate, MeanImage};
+use crate::render::preview::{coarse_pass, preview_blocks};
 use crate::render::{PassOutcome, RenderError, RenderStats, Renderer};
-use crate::scene::{self, Scene};
+use crate::scene::Scene;
 use crate::settings::{RenderSettings, SettingsOverrides};
+use source::Built;
+pub use source::SceneSource;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender};
@@ -26,12 +30,12 @@ use std::time::{Duration, Instant};
 /// Nice value of the render threads: the UI thread (nice 0) always gets the CPU first.
 const RENDER_NICE: i32 = 10;
 
-/// What to render: a scene (file or built-in name) and the settings layers above the scene's
-/// own `[render]` table (see [`RenderSettings::resolve`]).
+/// What to render: a scene (file or built-in name, possibly edited) and the settings layers
+/// above the scene's own `[render]` table (see [`RenderSettings::resolve`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Request {
     pub id: u64,
-    pub scene: String,
+    pub scene: SceneSource,
     pub cli: SettingsOverrides,
     pub form: SettingsOverrides,
     /// Start a new film even if the current one could go on.
@@ -71,6 +75,9 @@ pub struct Snapshot {
     /// saves read it whenever they need to. A copy per snapshot cost 12 bytes per pixel, 24
     /// while one replaced another: 200 MB at 3840x2160.
     pub image: Arc<MeanImage>,
+    /// A coarse preview of the render (see `render::preview`), shown instead of `image` until
+    /// the film has a complete pass; never part of the film.
+    pub preview: Option<Arc<MeanImage>>,
     pub stats: RenderStats,
     pub error: ErrorEstimate,
     pub target_spp: u32,
@@ -221,6 +228,10 @@ struct Job {
     renderer: Renderer,
     status: JobStatus,
     last_sent: Option<Instant>,
+    /// The block sizes of the coarse preview passes still to run before the film's first pass.
+    blocks: Vec<u32>,
+    /// The last coarse preview, until the film has a complete pass.
+    preview: Option<Arc<MeanImage>>,
 }
 
 struct Worker {
@@ -230,7 +241,7 @@ struct Worker {
     min_interval: Duration,
     /// The pool and the thread count it was built for (0 = one per core).
     pool: Option<(usize, Arc<rayon::ThreadPool>)>,
-    scene: Option<(String, Arc<Scene>)>,
+    scene: Option<Built>,
     job: Option<Job>,
     next_job: u64,
 }
@@ -268,18 +279,16 @@ impl Worker {
                 .job
                 .as_ref()
                 .is_some_and(|j| j.status == JobStatus::Running);
+            let mut commands = Vec::new();
             if !running {
                 match self.rx.recv() {
-                    Ok(cmd) => {
-                        if !self.guarded(|w| w.handle(cmd)) {
-                            return;
-                        }
-                    }
+                    Ok(cmd) => commands.push(cmd),
                     Err(_) => return,
                 }
             }
             self.cancel.store(false, Ordering::SeqCst);
-            while let Ok(cmd) = self.rx.try_recv() {
+            commands.extend(self.rx.try_iter());
+            for cmd in newest_start_only(commands) {
                 if !self.guarded(|w| w.handle(cmd)) {
                     return;
                 }
@@ -351,16 +360,12 @@ impl Worker {
     /// Load the scene if it changed, merge the settings, and either go on with the current film
     /// (only the stopping rule or display settings changed) or start a new one.
     fn start(&mut self, req: &Request) -> Result<(), String> {
-        let scene = match &self.scene {
-            Some((spec, s)) if *spec == req.scene => s.clone(),
-            _ => {
-                let s = Arc::new(scene::load(&req.scene).map_err(|e| e.to_string())?);
-                self.scene = Some((req.scene.clone(), s.clone()));
-                s
-            }
-        };
+        let built = Built::scene_for(self.scene.as_ref(), &req.scene)?;
+        let scene = built.scene.clone();
         let settings = RenderSettings::resolve(&scene.render, &req.cli, Some(&req.form));
         settings.validate()?;
+        // Kept only once the request is accepted: a failed one leaves the last good scene.
+        let built = Some(built);
 
         let continues = !req.fresh
             && self.job.as_ref().is_some_and(|j| {
@@ -391,9 +396,12 @@ impl Worker {
                 renderer,
                 status: JobStatus::Running,
                 last_sent: None,
+                blocks: preview_blocks(settings.width, settings.height),
+                preview: None,
             });
             self.next_job += 1;
         }
+        self.scene = built;
         let job = self.job.as_ref().expect("set above");
         self.send(SessionEvent::Started {
             request: req.id,
@@ -444,11 +452,32 @@ impl Worker {
         }
     }
 
-    /// One batch of passes, then a snapshot if one is due.
+    /// One batch of passes, then a snapshot if one is due; before the film's first pass, the
+    /// coarse preview passes, each shown as soon as it is done.
     fn step(&mut self) {
         let Some(job) = &mut self.job else { return };
         if job.status != JobStatus::Running {
             return;
+        }
+        if job.renderer.stats().complete_passes == 0 && !job.blocks.is_empty() {
+            let block = job.blocks.remove(0);
+            let pool = self.pool.as_ref().map(|(_, p)| p.clone());
+            let r = &job.renderer;
+            let image =
+                pool.and_then(|pool| coarse_pass(&r.scene, &r.settings, block, pool, &self.cancel));
+            match image {
+                Some(image) => {
+                    job.preview = Some(image);
+                    self.snapshot(true);
+                }
+                // Cancelled by a new command: this block again after it, if the job goes on.
+                None if self.cancel.load(Ordering::Relaxed) => job.blocks.insert(0, block),
+                None => {}
+            }
+            return;
+        }
+        if job.renderer.stats().complete_passes > 0 {
+            job.preview = None;
         }
         // About a frame's worth of passes: the threads meet once a batch, and the preview
         // could not show more often anyway.
@@ -462,54 +491,6 @@ impl Worker {
             .as_ref()
             .is_some_and(|j| j.status != JobStatus::Running);
         self.snapshot(changed);
-    }
-
-    /// Write the current film to `path` (the `w` key).
-    fn save_film(&self, path: &std::path::Path) -> Result<(), String> {
-        let (Some(job), Some((spec, _))) = (&self.job, &self.scene) else {
-            return Err("nothing rendered yet".into());
-        };
-        let hash = film_file::scene_hash(spec)?;
-        let head = FilmHeader::new(spec, &hash, &job.renderer.settings);
-        let header = film_file::header_of(&job.renderer, &head);
-        film_file::write(
-            path,
-            &header,
-            job.renderer.film(),
-            job.renderer.sample_map(),
-        )
-        .map_err(|e| e.to_string())
-    }
-
-    /// Continue the film in `path` in the current job, started with the film's settings.
-    fn resume_film(&mut self, path: &std::path::Path) -> Result<(), String> {
-        let (h, film, map) = film_file::read(path).map_err(|e| e.to_string())?;
-        let (Some(job), Some((spec, _))) = (&mut self.job, &self.scene) else {
-            return Err("no render to continue".into());
-        };
-        let hash = film_file::scene_hash(spec)?;
-        let head = FilmHeader::new(spec, &hash, &job.renderer.settings);
-        head.same_render(&h)
-            .map_err(|e| format!("not a film of this render: {e}"))?;
-        let (first, next) = match h.passes.as_slice() {
-            [] => (0, 0),
-            [r] => (r[0], r[1]),
-            _ => return Err(format!("its passes {} have gaps", h.passes_text())),
-        };
-        let mut stats = h.stats.to_render();
-        stats.passes = next;
-        job.renderer.resume(film, first, next, h.until, stats, map);
-        if h.shard.is_none() {
-            job.renderer.set_end(None);
-        }
-        if job.renderer.needs_pilot() {
-            let map = job.renderer.pilot_map(&AtomicBool::new(false));
-            job.renderer.set_map(map);
-        }
-        job.status = JobStatus::Running;
-        self.update_status();
-        self.snapshot(true);
-        Ok(())
     }
 
     /// Send a snapshot if forced or the last one is older than the minimum interval.
@@ -529,6 +510,10 @@ impl Worker {
         let snap = Snapshot {
             job: job.id,
             image: film.mean_image(),
+            preview: job
+                .preview
+                .clone()
+                .filter(|_| job.renderer.stats().complete_passes == 0),
             stats: job.renderer.stats(),
             error,
             target_spp: job.renderer.settings.spp,
@@ -537,6 +522,30 @@ impl Worker {
         };
         self.send(SessionEvent::Progress(Arc::new(snap)));
     }
+}
+
+/// The commands in order, but of several `Start`s only the newest (fresh if any of them was):
+/// a request states the whole render, so the ones it replaces would only be built to be
+/// cancelled (holding a key that moves the camera queues one per repeat).
+fn newest_start_only(commands: Vec<Command>) -> Vec<Command> {
+    let fresh = commands
+        .iter()
+        .any(|c| matches!(c, Command::Start(r) if r.fresh));
+    let last = commands
+        .iter()
+        .rposition(|c| matches!(c, Command::Start(_)));
+    commands
+        .into_iter()
+        .enumerate()
+        .filter(|(i, c)| !matches!(c, Command::Start(_)) || Some(*i) == last)
+        .map(|(_, c)| match c {
+            Command::Start(mut r) => {
+                r.fresh |= fresh;
+                Command::Start(r)
+            }
+            c => c,
+        })
+        .collect()
 }
 
 /// Whether two settings produce the same film (they may differ in when to stop and in how the
@@ -692,6 +701,86 @@ mod tests {
         assert!(snap.error.relative() <= 0.5, "{:?}", snap.error);
         assert!(snap.stats.complete_passes < 1000);
         worker.shutdown();
+    }
+
+    /// The film's mean bits.
+    fn bits(image: &MeanImage) -> Vec<u64> {
+        (0..image.pixels())
+            .flat_map(|i| image.get(i).map(f64::to_bits))
+            .collect()
+    }
+
+    #[test]
+    fn coarse_previews_come_first_and_leave_the_film_as_without_them() {
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        // A camera moved in the scene's text: 160x120 takes previews at blocks 4 and 2.
+        let src = crate::scene::builtin::get("cornell").unwrap();
+        let moved = src.replace("position = [50, 52, 295.6]", "position = [55, 50, 290]");
+        assert_ne!(moved, src);
+        let mut req = request(1, 3, IntegratorKind::Path);
+        req.cli.width = Some(160);
+        req.cli.height = Some(120);
+        req.scene.text = Some(moved.as_str().into());
+        worker.send(Command::Start(req.clone()));
+        let mut blocks = Vec::new();
+        let done = loop {
+            match rx.recv_timeout(Duration::from_secs(120)) {
+                Ok(SessionEvent::Progress(s)) => {
+                    match &s.preview {
+                        Some(p) => {
+                            assert_eq!(s.stats.complete_passes, 0, "a preview before the film");
+                            blocks.push(p.block());
+                        }
+                        None if s.stats.complete_passes > 0 => assert!(blocks.len() == 2),
+                        None => {}
+                    }
+                    if s.status == JobStatus::Done {
+                        break s;
+                    }
+                }
+                Ok(SessionEvent::Failed { message, .. }) => panic!("{message}"),
+                Ok(_) => {}
+                Err(e) => panic!("no finished render: {e}"),
+            }
+        };
+        assert_eq!(blocks, vec![4, 2]);
+        worker.shutdown();
+        // The film is the one a render of the moved scene without previews makes, bit for bit.
+        let scene = crate::scene::load_text("cornell", &moved, &Default::default()).unwrap();
+        let settings = RenderSettings::resolve(&scene.render, &req.cli, None);
+        let mut r = Renderer::new(Arc::new(scene), settings).unwrap();
+        r.render(&AtomicBool::new(false), |_| true);
+        assert_eq!(done.stats.complete_passes, 3);
+        assert_eq!(bits(&done.image), bits(&r.film().mean_image()));
+    }
+
+    #[test]
+    fn of_the_starts_queued_only_the_newest_is_built() {
+        let starts = |ids: &[u64]| -> Vec<Command> {
+            ids.iter()
+                .map(|&id| {
+                    let mut r = request(id, 1, IntegratorKind::Path);
+                    r.fresh = id == 2;
+                    Command::Start(r)
+                })
+                .collect()
+        };
+        let mut cmds = starts(&[1, 2]);
+        cmds.push(Command::Pause(true));
+        cmds.extend(starts(&[3]));
+        cmds.push(Command::SaveFilm("x.film".into()));
+        let kept: Vec<String> = newest_start_only(cmds)
+            .iter()
+            .map(|c| match c {
+                Command::Start(r) => format!("start {} fresh {}", r.id, r.fresh),
+                other => format!("{other:?}"),
+            })
+            .collect();
+        assert_eq!(
+            kept,
+            vec!["Pause(true)", "start 3 fresh true", "SaveFilm(\"x.film\")"]
+        );
     }
 
     #[test]

@@ -134,7 +134,7 @@ impl App {
         self.next_request += 1;
         Request {
             id: self.next_request,
-            scene: self.form.scene.clone(),
+            scene: self.form.scene.clone().into(),
             cli: self.cli.clone(),
             form: self.form.overrides.clone(),
             fresh,
@@ -603,6 +603,7 @@ mod tests {
             Arc::new(Snapshot {
                 job: 1,
                 image: image.clone(),
+                preview: None,
                 stats: Default::default(),
                 error: Default::default(),
                 target_spp: 2,

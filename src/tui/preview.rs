@@ -281,6 +281,7 @@ mod tests {
         Snapshot {
             job: 1,
             image: std::sync::Arc::new(crate::render::film::MeanImage::from_rgb(w, h, &rgb)),
+            preview: None,
             stats: RenderStats::default(),
             error: ErrorEstimate::default(),
             target_spp: 1,

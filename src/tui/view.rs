@@ -641,6 +641,7 @@ mod tests {
         let snap = Snapshot {
             job: 1,
             image: Arc::new(MeanImage::from_rgb(fw, fh, &rgb)),
+            preview: None,
             stats: RenderStats {
                 passes: 32,
                 complete_passes: 32,
