@@ -24,6 +24,7 @@ use crate::settings::SettingsOverrides;
 use std::sync::Arc;
 use std::time::Duration;
 
+pub use camera::DEFAULT_VFOV;
 pub use error::SceneError;
 pub use load::{load, load_str, load_str_with, load_text, load_with, BuildOptions};
 

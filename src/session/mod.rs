@@ -86,6 +86,13 @@ pub struct Snapshot {
     pub status: JobStatus,
 }
 
+impl Snapshot {
+    /// The image to show: the coarse preview while there is one, else the film's.
+    pub fn picture(&self) -> &Arc<MeanImage> {
+        self.preview.as_ref().unwrap_or(&self.image)
+    }
+}
+
 // A few hundred bytes per event, a few events per second: boxing would buy nothing.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
@@ -753,6 +760,36 @@ mod tests {
         r.render(&AtomicBool::new(false), |_| true);
         assert_eq!(done.stats.complete_passes, 3);
         assert_eq!(bits(&done.image), bits(&r.film().mean_image()));
+    }
+
+    #[test]
+    fn the_same_text_written_under_another_name_goes_on_with_the_film() {
+        let dir = tempfile::tempdir().unwrap();
+        let src = crate::scene::builtin::get("cornell").unwrap();
+        let (a, b) = (dir.path().join("a.toml"), dir.path().join("b.toml"));
+        std::fs::write(&a, src).unwrap();
+        std::fs::write(&b, src).unwrap();
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        let mut req = request(1, 2, IntegratorKind::Path);
+        req.scene = SceneSource::from(a.to_str().unwrap());
+        worker.send(Command::Start(req.clone()));
+        let first = until(&rx, JobStatus::Done);
+        req.id = 2;
+        req.cli.spp = Some(3);
+        req.scene = SceneSource {
+            text: Some(src.into()),
+            ..SceneSource::from(b.to_str().unwrap())
+        };
+        worker.send(Command::Start(req.clone()));
+        let more = until(&rx, JobStatus::Done);
+        assert_eq!((more.job, more.stats.complete_passes), (first.job, 3));
+        // Another text is another scene.
+        req.id = 3;
+        req.scene.text = Some(src.replace("emission = 12", "emission = 11").into());
+        worker.send(Command::Start(req));
+        assert_ne!(until(&rx, JobStatus::Done).job, first.job);
+        worker.shutdown();
     }
 
     #[test]

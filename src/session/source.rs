@@ -2,7 +2,7 @@
 //! with the request), and building it, from the last scene's geometry when only the camera
 //! changed.
 
-use crate::scene::load::{read_source, BuildOptions};
+use crate::scene::load::{base_dir, read_source, BuildOptions};
 use crate::scene::{reload, Scene};
 use std::sync::Arc;
 
@@ -34,6 +34,14 @@ impl From<String> for SceneSource {
     }
 }
 
+/// The folder relative paths in the scene `spec` start from (the current one for a built-in).
+fn folder(spec: &str) -> Option<std::path::PathBuf> {
+    let dir = base_dir(spec)
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or_else(|| ".".into());
+    std::path::absolute(dir).ok()
+}
+
 /// The scene last built, with what it was built from.
 pub(super) struct Built {
     pub source: SceneSource,
@@ -60,6 +68,19 @@ impl Built {
                 .0
                 .into(),
         };
+        // The same text read from the same folder (a built-in written to ./<name>.toml): the
+        // same scene, so the render goes on.
+        if let Some(p) = prev.filter(|p| {
+            p.source.generation == source.generation
+                && *p.text == *text
+                && folder(&p.source.spec) == folder(&source.spec)
+        }) {
+            return Ok(Built {
+                source: source.clone(),
+                text,
+                scene: p.scene.clone(),
+            });
+        }
         let same_files = prev
             .filter(|p| p.source.spec == source.spec && p.source.generation == source.generation);
         let scene = reload::rebuild(

@@ -1,14 +1,18 @@
 //! The UI model: everything the view shows, updated by events. No threads, no terminal: the main
 //! loop turns the [`Action`]s it returns into commands, and the view is a function of it.
 
+use super::camera::Rig;
 use super::color::{ColorChoice, ColorMode};
 use super::form::{Field, Form, Shown};
 use super::graphics::Picture;
 use super::layout::layout;
+use super::pick::Flash;
 use super::preview::{PreviewCache, ViewState};
 use super::save::SaveKind;
+use super::scene_form::{self, Picked};
+use crate::scene::edit::SceneDoc;
 use crate::scene::Scene;
-use crate::session::{BuildNotes, JobStatus, Request, SessionEvent, Snapshot};
+use crate::session::{BuildNotes, JobStatus, Request, SceneSource, SessionEvent, Snapshot};
 use crate::settings::{RenderSettings, SettingsOverrides};
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use ratatui::layout::Rect;
@@ -35,6 +39,16 @@ pub enum Message {
     Error(String),
 }
 
+/// What a worker event asks of the screen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Redraw {
+    No,
+    /// At the next frame (at most `--fps` a second).
+    Later,
+    /// At once: the first picture of a new view, or a finer one of it.
+    Now,
+}
+
 pub struct App {
     pub form: Form,
     /// The CLI's layer of the settings merge.
@@ -48,6 +62,9 @@ pub struct App {
     pub scene: Option<Arc<Scene>>,
     pub threads: usize,
     pub snapshot: Option<Arc<Snapshot>>,
+    /// The snapshot whose picture the preview shows: `snapshot`, except while a new film has
+    /// nothing to show yet (the last picture stays instead of a black one).
+    shown: Option<Arc<Snapshot>>,
     /// A snapshot received but not yet turned into preview colours (done once per frame).
     pending: Option<Arc<Snapshot>>,
     pub color_mode: ColorMode,
@@ -75,9 +92,32 @@ pub struct App {
     /// Set when the first request fails: there is nothing to show, so leave with this error.
     pub fatal: Option<String>,
     /// The scene and form layer of the last accepted request, restored if a request fails.
-    accepted: Option<(String, SettingsOverrides)>,
-    next_request: u64,
+    accepted: Option<(String, SettingsOverrides, Option<SceneDoc>)>,
+    pub(super) next_request: u64,
     pub quit: bool,
+    /// The scene's text with the edits made in the TUI (None if it could not be read: the
+    /// request names the scene and the worker reports why).
+    pub doc: Option<SceneDoc>,
+    /// Raised when a file the scene reads (besides its own text) changed on disk.
+    pub(super) generation: u64,
+    /// Camera mode (`v`): the keys move the camera.
+    pub camera_mode: bool,
+    pub(super) rig: Option<Rig>,
+    /// Camera moves of one stay in camera mode are one step of undo.
+    pub(super) camera_group: u64,
+    /// The object picked (`o`, a click), whose keys the form shows.
+    pub picked: Option<Picked>,
+    /// The picked object's outline, shown briefly.
+    pub flash: Option<Flash>,
+    /// The files the scene reads, for the watcher.
+    pub watched: Vec<std::path::PathBuf>,
+    /// Requests sent on a key press and when the key was read, until a picture of that request
+    /// shows (the `--bench-log`'s key-to-image latency).
+    pub(super) view_keys: Vec<(u64, Instant)>,
+    /// (job, request) of the requests the worker started, newest last.
+    jobs: Vec<(u64, u64)>,
+    /// Where a mouse drag in camera mode was last.
+    pub(super) drag: Option<(u16, u16)>,
 }
 
 impl App {
@@ -88,6 +128,11 @@ impl App {
         color_mode: ColorMode,
         halfblock: bool,
     ) -> App {
+        let doc = SceneDoc::open(&scene).ok();
+        let watched = doc
+            .as_ref()
+            .map(|d| crate::scene::reload::sources(&d.spec, &d.text()))
+            .unwrap_or_default();
         App {
             form: Form::new(scene.clone(), color),
             cli,
@@ -97,6 +142,7 @@ impl App {
             scene: None,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             snapshot: None,
+            shown: None,
             pending: None,
             color_mode,
             halfblock,
@@ -116,6 +162,17 @@ impl App {
             accepted: None,
             next_request: 0,
             quit: false,
+            doc,
+            generation: 0,
+            camera_mode: false,
+            rig: None,
+            camera_group: 0,
+            picked: None,
+            flash: None,
+            watched,
+            view_keys: Vec::new(),
+            jobs: Vec::new(),
+            drag: None,
         }
     }
 
@@ -128,17 +185,53 @@ impl App {
         self.snapshot.as_ref().map(|s| s.status)
     }
 
-    /// A request for the current scene and form (`fresh`: start a new film even if the current
-    /// one could go on).
+    /// A request for the current scene (as edited) and form (`fresh`: start a new film even if
+    /// the current one could go on).
     pub fn request(&mut self, fresh: bool) -> Request {
         self.next_request += 1;
+        let scene = match &self.doc {
+            Some(d) => SceneSource {
+                spec: d.spec.clone(),
+                text: Some(d.text().into()),
+                generation: self.generation,
+            },
+            None => SceneSource {
+                generation: self.generation,
+                ..SceneSource::from(self.form.scene.as_str())
+            },
+        };
         Request {
             id: self.next_request,
-            scene: self.form.scene.clone().into(),
+            scene,
             cli: self.cli.clone(),
             form: self.form.overrides.clone(),
             fresh,
         }
+    }
+
+    /// The form's fields shown now: the render fields for the integrator in effect, then the
+    /// scene's (environment, picked object).
+    pub fn fields(&self) -> Vec<Field> {
+        let mut fields: Vec<Field> = Field::visible(self.settings().integrator).collect();
+        if let Some(doc) = &self.doc {
+            fields.extend(scene_form::fields(doc, self.picked.as_ref()));
+        }
+        fields
+    }
+
+    /// A field's value as the form shows it.
+    pub fn field_value(&self, field: Field, now: &Shown) -> String {
+        match &self.doc {
+            Some(doc) if field.of_scene() => {
+                scene_form::value(field, doc, self.picked.as_ref(), self.scene.as_deref())
+            }
+            _ => self.form.value(field, now),
+        }
+    }
+
+    /// The snapshot whose picture the preview shows.
+    pub fn shown_snapshot(&self) -> Option<&Arc<Snapshot>> {
+        self.shown.as_ref()
     }
 
     pub fn resize(&mut self, width: u16, height: u16) {
@@ -146,12 +239,17 @@ impl App {
         self.refresh_preview(None);
     }
 
-    /// Recompute the preview's colours, from a new snapshot or the last one.
+    /// Recompute the preview's colours, from a new snapshot or the last one. A new film's
+    /// snapshot with nothing to show yet (no pass, no coarse preview) leaves the last picture.
     pub fn refresh_preview(&mut self, snap: Option<Arc<Snapshot>>) {
         if let Some(s) = snap {
+            let blank = s.stats.complete_passes == 0 && s.preview.is_none();
+            if !blank || self.shown.as_ref().is_none_or(|old| old.job == s.job) {
+                self.shown = Some(s.clone());
+            }
             self.snapshot = Some(s);
         }
-        let Some(snap) = self.snapshot.clone() else {
+        let Some(snap) = self.shown.clone() else {
             return;
         };
         let Some(area) = layout(self.size, self.show_chart).preview else {
@@ -218,16 +316,45 @@ impl App {
         }
     }
 
-    /// A worker event; returns whether the screen changed.
-    pub fn on_worker(&mut self, ev: SessionEvent) -> bool {
-        let changed = self.on_worker_event(ev);
+    /// A worker event; what it asks of the screen.
+    pub fn on_worker(&mut self, ev: SessionEvent) -> Redraw {
+        let redraw = self.on_worker_event(ev);
         // A new scene's `[render]` table or a rolled-back form may change the integrator, and
         // with it which fields the form shows.
-        self.form.keep_visible(self.settings().integrator);
-        changed
+        self.form.keep_visible(&self.fields());
+        redraw
     }
 
-    fn on_worker_event(&mut self, ev: SessionEvent) -> bool {
+    /// A request was sent for a key (or click) read at `at`.
+    pub fn note_request(&mut self, id: u64, at: Instant) {
+        self.view_keys.push((id, at));
+        // Requests that never show (a failed one) must not pile up.
+        if self.view_keys.len() > 1024 {
+            self.view_keys.remove(0);
+        }
+    }
+
+    /// The key presses whose request a picture on screen now answers (their requests, or
+    /// newer ones, have a picture shown): when each was read.
+    pub fn views_shown(&mut self) -> Vec<Instant> {
+        let Some(job) = self.shown.as_ref().map(|s| s.job) else {
+            return Vec::new();
+        };
+        let Some(newest) = self
+            .jobs
+            .iter()
+            .filter(|(j, _)| *j == job)
+            .map(|(_, r)| *r)
+            .max()
+        else {
+            return Vec::new();
+        };
+        let (done, waiting) = self.view_keys.drain(..).partition(|(r, _)| *r <= newest);
+        self.view_keys = waiting;
+        done.into_iter().map(|(_, at)| at).collect()
+    }
+
+    fn on_worker_event(&mut self, ev: SessionEvent) -> Redraw {
         match ev {
             SessionEvent::Started {
                 request,
@@ -238,6 +365,7 @@ impl App {
                 scene,
                 notes,
                 threads,
+                job,
                 ..
             } => {
                 self.scene = Some(scene);
@@ -247,15 +375,23 @@ impl App {
                 self.threads = threads;
                 self.worker_panic = None;
                 if request == self.next_request {
-                    self.accepted = Some((self.form.scene.clone(), self.form.overrides.clone()));
+                    self.accepted = Some((
+                        self.form.scene.clone(),
+                        self.form.overrides.clone(),
+                        self.doc.clone(),
+                    ));
                 }
                 if restarted {
                     self.history.clear();
                 }
+                self.jobs.push((job, request));
+                if self.jobs.len() > 64 {
+                    self.jobs.remove(0);
+                }
             }
             SessionEvent::FilmSaved(result) => {
                 self.on_saved(result);
-                return true;
+                return Redraw::Later;
             }
             SessionEvent::Progress(snap) => {
                 let new_job = self.snapshot.as_ref().is_none_or(|s| s.job != snap.job);
@@ -272,24 +408,34 @@ impl App {
                 {
                     self.history.push((t, rmse));
                 }
-                // The first snapshot of a render is applied at once (so a tiny render that
-                // finishes between two frames still shows); later ones wait for the next frame.
-                if self.snapshot.is_none() || new_job {
+                // A new picture of the view (the first snapshot of a render, a finer coarse
+                // preview, the film's first pass) is applied and drawn at once, so a tiny
+                // render that finishes between two frames still shows and a camera move shows
+                // as soon as it can; later ones wait for the next frame.
+                let picture = |s: &Snapshot| (s.job, s.preview.as_ref().map(|p| p.block()));
+                let newer = self.shown.as_deref().map(picture) != Some(picture(&snap));
+                if self.snapshot.is_none() || new_job || newer {
+                    self.pending = None;
                     self.refresh_preview(Some(snap));
-                } else {
-                    self.pending = Some(snap);
+                    return Redraw::Now;
                 }
+                self.pending = Some(snap);
             }
             SessionEvent::Failed { request, message } => {
                 if self.accepted.is_none() && self.snapshot.is_none() {
                     self.fatal = Some(message);
                     self.quit = true;
-                    return true;
+                    return Redraw::Now;
                 }
                 if request == self.next_request {
-                    if let Some((scene, overrides)) = self.accepted.clone() {
+                    if let Some((scene, overrides, doc)) = self.accepted.clone() {
                         self.form.scene = scene;
                         self.form.overrides = overrides;
+                        if doc.as_ref().map(SceneDoc::text) != self.doc.as_ref().map(SceneDoc::text)
+                        {
+                            self.doc = doc;
+                            self.scene_changed();
+                        }
                     }
                 }
                 self.message = Some(Message::Error(message));
@@ -298,7 +444,7 @@ impl App {
                 self.worker_panic = Some(msg);
             }
         }
-        true
+        Redraw::Later
     }
 
     /// The scene camera's lens radius and focus distance ((0, 0) before a scene is loaded).
@@ -346,14 +492,18 @@ impl App {
         });
     }
 
-    fn shown(&self, settings: &RenderSettings) -> String {
+    /// The text an edit of the selected field starts from.
+    fn edit_text(&self, settings: &RenderSettings) -> String {
         let now = Shown {
             settings,
             color_mode: self.color_mode,
             threads: self.threads,
             lens: self.lens(),
         };
-        self.form.edit_text(self.form.field(), &now)
+        match self.form.field() {
+            f if f.of_scene() => self.field_value(f, &now),
+            f => self.form.edit_text(f, &now),
+        }
     }
 
     /// A key press.
@@ -373,17 +523,30 @@ impl App {
         if self.form.editing.is_some() {
             return self.on_edit_key(key, ctrl);
         }
+        if self.camera_mode {
+            if let Some(action) = self.on_camera_key(key) {
+                return action;
+            }
+        }
         match key.code {
+            KeyCode::Char('r') if ctrl => return self.redo(),
             KeyCode::Char('q') | KeyCode::Esc => {
                 self.quit = true;
                 return Some(Action::Quit);
             }
             KeyCode::Char('?') => self.show_help = true,
             KeyCode::Char('i') => self.show_details = true,
-            KeyCode::Tab => self.form.select_next(true, self.settings().integrator),
-            KeyCode::BackTab => self.form.select_next(false, self.settings().integrator),
+            KeyCode::Char('v') => self.set_camera_mode(true),
+            KeyCode::Char('o') => return self.pick_at_centre(),
+            KeyCode::Char('W') => return self.write_scene(),
+            KeyCode::Char('u') => return self.undo(),
+            KeyCode::Tab => self.form.select_next(true, &self.fields()),
+            KeyCode::BackTab => self.form.select_next(false, &self.fields()),
             KeyCode::Enter => {
                 let field = self.form.field();
+                if field.of_scene() && field.cycles() {
+                    return self.cycle_scene_field(field);
+                }
                 if field.cycles() {
                     let s = self.settings();
                     let now = Shown {
@@ -395,7 +558,7 @@ impl App {
                     self.form.cycle(field, &now);
                     return self.changed(field);
                 }
-                let text = self.shown(&self.settings());
+                let text = self.edit_text(&self.settings());
                 self.form.editing = Some(text);
             }
             KeyCode::Char(' ') => {
@@ -422,8 +585,8 @@ impl App {
                 self.show_chart = !self.show_chart;
                 self.refresh_preview(None);
             }
-            KeyCode::Char('+') | KeyCode::Char('=') => self.zoom(true),
-            KeyCode::Char('-') => self.zoom(false),
+            KeyCode::Char('+') | KeyCode::Char('=') => self.zoom_preview(true),
+            KeyCode::Char('-') => self.zoom_preview(false),
             KeyCode::Char('0') => {
                 self.view = ViewState::default();
                 self.refresh_preview(None);
@@ -438,9 +601,14 @@ impl App {
     }
 
     fn on_edit_key(&mut self, key: KeyEvent, ctrl: bool) -> Option<Action> {
+        let scene_field = self.form.field().of_scene();
         let text = self.form.editing.as_mut()?;
         match key.code {
             KeyCode::Esc => self.form.editing = None,
+            KeyCode::Enter if scene_field => {
+                let text = text.clone();
+                return self.commit_scene_field(self.form.field(), &text);
+            }
             KeyCode::Enter => {
                 let text = text.clone();
                 let field = self.form.field();
@@ -466,6 +634,13 @@ impl App {
     /// A form field changed: restart or update the render, or only the display.
     fn changed(&mut self, field: Field) -> Option<Action> {
         match field {
+            Field::Scene => {
+                // Another scene: its own text, nothing picked, a new film.
+                self.doc = SceneDoc::open(&self.form.scene).ok();
+                self.picked = None;
+                self.scene_changed();
+                Some(Action::Start(self.request(false)))
+            }
             Field::Color => {
                 self.color_mode = self.form.color.resolve();
                 None
@@ -499,7 +674,7 @@ impl App {
         Some(Action::Save(kind))
     }
 
-    fn zoom(&mut self, zoom_in: bool) {
+    pub(super) fn zoom_preview(&mut self, zoom_in: bool) {
         let Some(g) = self.geometry() else {
             return;
         };

@@ -165,7 +165,7 @@ impl PreviewCache {
         exposure: f64,
         tonemap: Tonemap,
     ) {
-        let image = &*snap.image;
+        let image = &**snap.picture();
         let film = (image.width(), image.height());
         let geometry = Geometry::new(film, area, view, halfblock);
         let key = Key {
