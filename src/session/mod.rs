@@ -215,10 +215,13 @@ impl SessionHandle {
 
     /// Queue a command and interrupt the running pass so it is taken promptly.
     pub fn send(&self, cmd: Command) {
-        // Send first, then cancel: the worker clears the flag before draining the queue, so a
-        // command is never left waiting behind a full pass.
-        let _ = self.tx.send(cmd);
+        // Raise the flag, then send. The worker clears the flag only after draining the queue,
+        // and waits for the command when it sees the flag with nothing queued, so a command is
+        // never left behind a full batch, and a flag never outlives its command: raised after
+        // the worker had taken the command, it cut the next render's first pass short (a pass
+        // number used, its samples missing: a film not the image of an uninterrupted render).
         self.cancel.store(true, Ordering::SeqCst);
+        let _ = self.tx.send(cmd);
     }
 
     /// Stop the render and join the worker.
@@ -293,8 +296,17 @@ impl Worker {
                     Err(_) => return,
                 }
             }
-            self.cancel.store(false, Ordering::SeqCst);
+            let raised = self.cancel.load(Ordering::SeqCst);
             commands.extend(self.rx.try_iter());
+            if raised && commands.is_empty() {
+                // The flag goes up just before its command is sent: it is on its way.
+                match self.rx.recv() {
+                    Ok(cmd) => commands.push(cmd),
+                    Err(_) => return,
+                }
+                commands.extend(self.rx.try_iter());
+            }
+            self.cancel.store(false, Ordering::SeqCst);
             for cmd in newest_start_only(commands) {
                 if !self.guarded(|w| w.handle(cmd)) {
                     return;
@@ -789,6 +801,31 @@ mod tests {
         req.scene.text = Some(src.replace("emission = 12", "emission = 11").into());
         worker.send(Command::Start(req));
         assert_ne!(until(&rx, JobStatus::Done).job, first.job);
+        worker.shutdown();
+    }
+
+    #[test]
+    fn requests_in_quick_succession_leave_every_pass_of_the_last_film_whole() {
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        let mut id = 0;
+        for seed in 0..40 {
+            // A new film, or two at once, to an idle or a busy worker: every pass of the film
+            // that renders must be whole (a cancel meant for another command must not cut its
+            // first pass short).
+            for s in (0..1 + seed % 2).map(|k| 2 * seed + k) {
+                id += 1;
+                let mut req = request(id, 3, IntegratorKind::Path);
+                req.cli.seed = Some(s);
+                worker.send(Command::Start(req));
+            }
+            let done = until(&rx, JobStatus::Done);
+            assert_eq!(
+                (done.stats.passes, done.stats.complete_passes),
+                (3, 3),
+                "round {seed}"
+            );
+        }
         worker.shutdown();
     }
 
