@@ -194,24 +194,29 @@ impl SceneDoc {
         Some(what)
     }
 
-    /// The file changed on disk to `text`: it becomes the text the changes apply to, and each
-    /// key the changes set is set again unless the file changed that key too (or the object is
-    /// gone). The redo list is dropped. A text that is not TOML is an error, and nothing changes.
+    /// The file changed on disk to `text`: it becomes the text the changes apply to. Each key
+    /// set by a change not yet written is set again, unless the file changed that key too (or
+    /// the object is gone); changes the file already held (written with `W`) are its now. The
+    /// redo list is dropped. A text that is not TOML is an error, and nothing changes.
     pub fn reload(&mut self, text: String) -> Result<Rebase, SceneError> {
         let new = parse_doc(&self.spec, &text)?;
-        let old = parse_doc(&self.spec, &self.original)?;
+        let old = parse_doc(&self.spec, &self.disk)?;
         let mut rebase = Rebase::default();
         let mut changes = Vec::new();
         for mut change in std::mem::take(&mut self.changes) {
             change.sets.retain(|(key, _)| {
-                let same = find_table(&new, key).is_some()
+                let unsaved = value_text(&self.doc, key) != value_text(&old, key);
+                if !unsaved {
+                    return false;
+                }
+                let keep = find_table(&new, key).is_some()
                     && value_text(&old, key) == value_text(&new, key);
-                if same {
+                if keep {
                     rebase.kept += 1;
                 } else {
                     rebase.dropped.push(key.to_string());
                 }
-                same
+                keep
             });
             if !change.sets.is_empty() {
                 changes.push(change);
@@ -581,6 +586,18 @@ mod tests {
             moved.replace("vfov = 28.8   # degrees", "vfov = 40   # degrees")
         );
         assert!(d.text().contains("radius = 9"));
+        // Changes written to the file are the file's: a reload neither keeps nor drops them.
+        let write = |p: &Path, b: &[u8]| std::fs::write(p, b).map_err(|e| e.to_string());
+        let dir = tempfile::tempdir().unwrap();
+        let mut w =
+            SceneDoc::from_text("box.toml", Some(dir.path().join("box.toml")), SRC.into()).unwrap();
+        w.apply(set(KeyPath::table("camera", "vfov"), number(50.0)))
+            .unwrap();
+        w.write(write).unwrap();
+        let edited = std::fs::read_to_string(dir.path().join("box.toml")).unwrap();
+        let r = w.reload(edited.replace("vfov = 50", "vfov = 60")).unwrap();
+        assert_eq!(r, Rebase::default());
+        assert!(w.text().contains("vfov = 60") && !w.dirty());
         // Broken TOML is the loader's error, with its line, and changes nothing.
         let before = d.text();
         let e = d.reload("[camera\n".into()).unwrap_err().to_string();

@@ -26,6 +26,9 @@ use std::time::{Duration, Instant};
 #[derive(Debug, PartialEq)]
 pub enum Action {
     Start(Request),
+    /// A request that cannot change the image (the scene written under its file's name): taken
+    /// after the running batch, so no pass is cut short.
+    Update(Request),
     Pause(bool),
     Save(SaveKind),
     /// Write the whole film (`w`), to merge or continue later.
@@ -118,6 +121,10 @@ pub struct App {
     jobs: Vec<(u64, u64)>,
     /// Where a mouse drag in camera mode was last.
     pub(super) drag: Option<(u16, u16)>,
+    /// The request that renders the scene file as last reloaded, and whether the file as it is
+    /// on disk fails to load (its error stays on the status line until the file is fixed).
+    pub(super) reload_request: Option<u64>,
+    pub(super) reload_failed: bool,
 }
 
 impl App {
@@ -173,6 +180,8 @@ impl App {
             view_keys: Vec::new(),
             jobs: Vec::new(),
             drag: None,
+            reload_request: None,
+            reload_failed: false,
         }
     }
 
@@ -219,14 +228,30 @@ impl App {
         fields
     }
 
-    /// A field's value as the form shows it.
+    /// A field's value as the form shows it (a scene's vector without its brackets and commas,
+    /// `0.63 0.065 0.05`, to fit the column).
     pub fn field_value(&self, field: Field, now: &Shown) -> String {
         match &self.doc {
-            Some(doc) if field.of_scene() => {
-                scene_form::value(field, doc, self.picked.as_ref(), self.scene.as_deref())
+            Some(_) if field.of_scene() => {
+                let text = self.scene_value(field);
+                match text.strip_prefix('[').and_then(|t| t.strip_suffix(']')) {
+                    Some(inner) => inner
+                        .split(',')
+                        .map(str::trim)
+                        .collect::<Vec<_>>()
+                        .join(" "),
+                    None => text,
+                }
             }
             _ => self.form.value(field, now),
         }
+    }
+
+    /// A scene field's value as TOML text (what an edit starts from).
+    fn scene_value(&self, field: Field) -> String {
+        self.doc.as_ref().map_or(String::new(), |doc| {
+            scene_form::value(field, doc, self.picked.as_ref(), self.scene.as_deref())
+        })
     }
 
     /// The snapshot whose picture the preview shows.
@@ -374,6 +399,9 @@ impl App {
                 self.notes = notes;
                 self.threads = threads;
                 self.worker_panic = None;
+                if Some(request) == self.reload_request {
+                    self.reload_failed = false;
+                }
                 if request == self.next_request {
                     self.accepted = Some((
                         self.form.scene.clone(),
@@ -422,6 +450,7 @@ impl App {
                 self.pending = Some(snap);
             }
             SessionEvent::Failed { request, message } => {
+                self.reload_failed |= Some(request) == self.reload_request;
                 if self.accepted.is_none() && self.snapshot.is_none() {
                     self.fatal = Some(message);
                     self.quit = true;
@@ -501,7 +530,7 @@ impl App {
             lens: self.lens(),
         };
         match self.form.field() {
-            f if f.of_scene() => self.field_value(f, &now),
+            f if f.of_scene() => self.scene_value(f),
             f => self.form.edit_text(f, &now),
         }
     }

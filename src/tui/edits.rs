@@ -255,7 +255,7 @@ impl App {
                 self.form.scene = doc.spec.clone();
                 self.watched = sources(&doc.spec, &doc.text());
                 // The same scene under its file's name: the render goes on.
-                Some(Action::Start(self.request(false)))
+                Some(Action::Update(self.request(false)))
             }
             Err(e) => {
                 self.message = Some(Message::Error(format!(
@@ -286,6 +286,12 @@ impl App {
                     return None;
                 }
             };
+            if text == doc.disk_text() && self.reload_failed {
+                // Back to the text the render is of: nothing to build again.
+                self.reload_failed = false;
+                self.message = Some(Message::Info(format!("{} loads again", path.display())));
+                return None;
+            }
             if text != doc.disk_text() {
                 match doc.reload(text) {
                     Ok(rebase) => {
@@ -301,6 +307,7 @@ impl App {
                         }
                     }
                     Err(e) => {
+                        self.reload_failed = true;
                         self.message = Some(Message::Error(e.to_string()));
                         return None;
                     }
@@ -321,7 +328,9 @@ impl App {
         }
         self.message = Some(Message::Info(what.join("; ")));
         self.scene_changed();
-        Some(Action::Start(self.request(false)))
+        let req = self.request(false);
+        self.reload_request = Some(req.id);
+        Some(Action::Start(req))
     }
 }
 
@@ -496,6 +505,12 @@ mod tests {
             Some(Message::Error(e)) => assert!(e.starts_with(&format!("{spec}:11:")), "{e}"),
             m => panic!("{m:?}"),
         }
+        // Back to the text the render is of: no new render, the error goes.
+        std::fs::write(&path, src.replace("emission = 12", "emission = 10")).unwrap();
+        assert!(app.on_files_changed(std::slice::from_ref(&path)).is_none());
+        assert!(matches!(&app.message, Some(Message::Info(m)) if m.ends_with("loads again")));
+        std::fs::write(&path, src.replace("[render]", "[render")).unwrap();
+        app.on_files_changed(std::slice::from_ref(&path));
         // W refuses to write over a file that changed on disk since it was read.
         press(&mut app, &[KeyCode::Char('W')]);
         assert!(matches!(&app.message, Some(Message::Error(e)) if e.contains("changed on disk")));

@@ -271,6 +271,7 @@ fn act(
             app.note_request(req.id, at);
             worker.send(Command::Start(req));
         }
+        Some(Action::Update(req)) => worker.send_after_batch(Command::Start(req)),
         Some(Action::Pause(p)) => worker.send(Command::Pause(p)),
         Some(Action::Save(kind)) => {
             if let Some(snap) = app.snapshot.clone() {
