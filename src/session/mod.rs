@@ -15,7 +15,7 @@ mod source;
 
 use crate::render::film::{ErrorEstimate, MeanImage};
 use crate::render::preview::{coarse_pass, preview_blocks};
-use crate::render::{PassOutcome, RenderError, RenderStats, Renderer};
+use crate::render::{build_pool, PassOutcome, RenderError, RenderStats, Renderer};
 use crate::scene::Scene;
 use crate::settings::{RenderSettings, SettingsOverrides};
 use source::Built;
@@ -193,6 +193,7 @@ impl SessionHandle {
             cancel: cancel.clone(),
             min_interval,
             pool: None,
+            preview_pool: None,
             scene: None,
             job: None,
             next_job: 1,
@@ -251,6 +252,10 @@ struct Worker {
     min_interval: Duration,
     /// The pool and the thread count it was built for (0 = one per core).
     pool: Option<(usize, Arc<rayon::ThreadPool>)>,
+    /// The coarse preview passes' pool, at the UI's priority: they are what the user waits
+    /// for after a camera move (a few milliseconds), and at nice 10 on a busy machine they
+    /// waited for everything else.
+    preview_pool: Option<(usize, Arc<rayon::ThreadPool>)>,
     scene: Option<Built>,
     job: Option<Job>,
     next_job: u64,
@@ -408,6 +413,14 @@ impl Worker {
                     p
                 }
             };
+            if self
+                .preview_pool
+                .as_ref()
+                .is_none_or(|(n, _)| *n != settings.threads)
+            {
+                let p = build_pool(settings.threads).map_err(|e| e.to_string())?;
+                self.preview_pool = Some((settings.threads, p));
+            }
             let renderer = Renderer::with_pool(scene.clone(), settings.clone(), pool)
                 .map_err(|e| e.to_string())?;
             self.job = Some(Job {
@@ -480,7 +493,7 @@ impl Worker {
         }
         if job.renderer.stats().complete_passes == 0 && !job.blocks.is_empty() {
             let block = job.blocks.remove(0);
-            let pool = self.pool.as_ref().map(|(_, p)| p.clone());
+            let pool = self.preview_pool.as_ref().map(|(_, p)| p.clone());
             let r = &job.renderer;
             let image =
                 pool.and_then(|pool| coarse_pass(&r.scene, &r.settings, block, pool, &self.cancel));
@@ -867,6 +880,7 @@ mod tests {
             cancel: Arc::new(AtomicBool::new(false)),
             min_interval: Duration::ZERO,
             pool: None,
+            preview_pool: None,
             scene: None,
             job: None,
             next_job: 1,

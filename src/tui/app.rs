@@ -7,7 +7,7 @@ use super::form::{Field, Form, Shown};
 use super::graphics::Picture;
 use super::layout::layout;
 use super::pick::Flash;
-use super::preview::{PreviewCache, ViewState};
+use super::preview::{Plans, PreviewCache, ViewState};
 use super::save::SaveKind;
 use super::scene_form::{self, Picked};
 use crate::scene::edit::SceneDoc;
@@ -284,14 +284,24 @@ impl App {
         let started = Instant::now();
         match &mut self.graphics {
             Some(g) => g.update(&snap, area, &self.view, s.exposure, s.tonemap),
-            None => self.preview.update(
-                &snap,
-                area,
-                &self.view,
-                self.halfblock,
-                s.exposure,
-                s.tonemap,
-            ),
+            None => {
+                // 256 colours: a coarse preview shows the nearest entries at once, the film
+                // its dither plans.
+                let plans = match (self.color_mode, snap.preview.is_some()) {
+                    (ColorMode::Truecolor, _) => Plans::None,
+                    (ColorMode::Ansi256, true) => Plans::Nearest,
+                    (ColorMode::Ansi256, false) => Plans::Dithered,
+                };
+                self.preview.update_with(
+                    &snap,
+                    area,
+                    &self.view,
+                    self.halfblock,
+                    s.exposure,
+                    s.tonemap,
+                    plans,
+                )
+            }
         }
         self.preview_at = Some((started, started.elapsed()));
     }
@@ -604,6 +614,8 @@ impl App {
                     ColorMode::Truecolor => ColorChoice::Truecolor,
                     ColorMode::Ansi256 => ColorChoice::Ansi256,
                 };
+                // 256 colours need the dither plans truecolor did without.
+                self.refresh_preview(None);
             }
             KeyCode::Char('f') => {
                 self.halfblock = !self.halfblock;
@@ -672,6 +684,7 @@ impl App {
             }
             Field::Color => {
                 self.color_mode = self.form.color.resolve();
+                self.refresh_preview(None);
                 None
             }
             Field::Exposure | Field::Tonemap => {

@@ -146,8 +146,13 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                 for k in keys.drain(..) {
                     let _ = writeln!(log, "key {:.3}", (now - k).as_secs_f64() * 1e3);
                 }
-                for k in app.views_shown() {
-                    let _ = writeln!(log, "view {:.3}", (now - k).as_secs_f64() * 1e3);
+                let views = app.views_shown();
+                for k in &views {
+                    let _ = writeln!(log, "view {:.3}", (now - *k).as_secs_f64() * 1e3);
+                }
+                if !views.is_empty() {
+                    // The harness waits for these lines.
+                    let _ = log.flush();
                 }
             }
             keys.clear();
@@ -165,6 +170,7 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
             Err(RecvTimeoutError::Timeout) => None,
             Err(RecvTimeoutError::Disconnected) => break Ok(()),
         };
+        let mut redraw_now = false;
         while let Some(ev) = next {
             match ev {
                 Event::Key(key, at) => {
@@ -194,7 +200,10 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                     urgent = true;
                 }
                 Event::Render(ev) => match app.on_worker(ev) {
-                    Redraw::Now => urgent = true,
+                    Redraw::Now => {
+                        urgent = true;
+                        redraw_now = true;
+                    }
                     Redraw::Later => dirty = true,
                     Redraw::No => {}
                 },
@@ -236,7 +245,9 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                     app.fatal = Some(format!("cannot read the terminal: {e}"));
                 }
             }
-            next = rx.try_recv().ok();
+            // A new picture of the view is drawn before anything else queued is taken (a
+            // coarse preview must not wait while the next, finer one is turned into colours).
+            next = if redraw_now { None } else { rx.try_recv().ok() };
         }
         if let Some(w) = watcher.as_mut() {
             w.set(&app.watched);
