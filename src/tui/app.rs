@@ -125,6 +125,8 @@ pub struct App {
     /// on disk fails to load (its error stays on the status line until the file is fixed).
     pub(super) reload_request: Option<u64>,
     pub(super) reload_failed: bool,
+    /// A reload not yet drawn (for the `--bench-log`).
+    pub reloaded: bool,
 }
 
 impl App {
@@ -182,6 +184,7 @@ impl App {
             drag: None,
             reload_request: None,
             reload_failed: false,
+            reloaded: false,
         }
     }
 

@@ -327,6 +327,7 @@ impl App {
             return None;
         }
         self.message = Some(Message::Info(what.join("; ")));
+        self.reloaded = true;
         self.scene_changed();
         let req = self.request(false);
         self.reload_request = Some(req.id);

@@ -150,7 +150,11 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                 for k in &views {
                     let _ = writeln!(log, "view {:.3}", (now - *k).as_secs_f64() * 1e3);
                 }
-                if !views.is_empty() {
+                let reloaded = std::mem::take(&mut app.reloaded);
+                if reloaded {
+                    let _ = writeln!(log, "reload");
+                }
+                if !views.is_empty() || reloaded {
                     // The harness waits for these lines.
                     let _ = log.flush();
                 }

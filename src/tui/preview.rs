@@ -428,19 +428,43 @@ mod tests {
         // Truecolor needs no plans; the coarse preview's are the nearest entries alone.
         cache.update_with(&snap, area, &view, true, 1.0, Tonemap::Clamp, Plans::None);
         assert!(cache.planned.iter().all(Option::is_none));
-        cache.update_with(&snap, area, &view, true, 1.0, Tonemap::Clamp, Plans::Nearest);
+        cache.update_with(
+            &snap,
+            area,
+            &view,
+            true,
+            1.0,
+            Tonemap::Clamp,
+            Plans::Nearest,
+        );
         assert_eq!(cache.changed, 0, "the colours are the same");
         for (plan, rgb) in cache.plans.iter().zip(&cache.shown) {
             assert_eq!(plan.0, [nearest(rgb.unwrap()); 16]);
         }
         // The same colours from the film: dithered now, though none moved.
-        cache.update_with(&snap, area, &view, true, 1.0, Tonemap::Clamp, Plans::Dithered);
+        cache.update_with(
+            &snap,
+            area,
+            &view,
+            true,
+            1.0,
+            Tonemap::Clamp,
+            Plans::Dithered,
+        );
         assert_eq!(cache.changed, 0);
         for (plan, rgb) in cache.plans.iter().zip(&cache.shown) {
             assert_eq!(*plan, plan_for(rgb.unwrap()));
         }
         // A coarse preview again (a new camera move) keeps nothing it does not need.
-        cache.update_with(&snap, area, &view, true, 1.0, Tonemap::Clamp, Plans::Nearest);
+        cache.update_with(
+            &snap,
+            area,
+            &view,
+            true,
+            1.0,
+            Tonemap::Clamp,
+            Plans::Nearest,
+        );
         assert!(cache.planned.iter().all(|p| *p == Some(Plans::Dithered)));
     }
 
