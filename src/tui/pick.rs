@@ -1,7 +1,7 @@
 //! Picking (`o`, or a click on the preview): the object the pinhole ray through a point of the
 //! preview hits first becomes the form's object, and its outline shows on the preview for a
-//! moment; a small crosshair marks the preview's centre in camera mode and while the outline
-//! shows.
+//! moment; a small crosshair marks the preview's centre in camera mode and while the outline of
+//! an object picked there shows.
 
 use super::app::{Action, App, Message};
 use super::form::Field;
@@ -26,6 +26,8 @@ pub struct Flash {
     pub area: Rect,
     pub geometry: Geometry,
     pub edge: Vec<bool>,
+    /// Picked at the preview's centre (`o`), where the crosshair shows, not with the mouse.
+    pub at_centre: bool,
 }
 
 /// The sub-pixels of the preview whose centre sees `object` and that have a neighbour (in the
@@ -161,16 +163,16 @@ impl App {
     /// `o`: pick the object under the preview's centre.
     pub(super) fn pick_at_centre(&mut self) -> Option<Action> {
         let (fx, fy) = self.centre();
-        self.pick(fx, fy)
+        self.pick(fx, fy, true)
     }
 
     /// A click: pick the object under the pointer.
     pub(super) fn pick_at_cell(&mut self, col: u16, row: u16) -> Option<Action> {
         let (fx, fy) = self.film_at_cell(col, row)?;
-        self.pick(fx, fy)
+        self.pick(fx, fy, false)
     }
 
-    fn pick(&mut self, fx: f64, fy: f64) -> Option<Action> {
+    fn pick(&mut self, fx: f64, fy: f64, at_centre: bool) -> Option<Action> {
         let scene = self.scene.clone()?;
         let s = self.settings();
         let Some(object) = scene.object_at(s.width, s.height, fx, fy) else {
@@ -200,6 +202,7 @@ impl App {
                     area,
                     geometry: g,
                     edge: outline(&scene, (s.width, s.height), &g, area, object),
+                    at_centre,
                 }),
             _ => None,
         };

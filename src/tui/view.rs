@@ -76,7 +76,7 @@ fn draw_marks(frame: &mut Frame, app: &App, area: Rect) {
     if let Some(f) = flash {
         pick::draw_outline(frame.buffer_mut(), f);
     }
-    if app.camera_mode || flash.is_some() {
+    if app.camera_mode || flash.is_some_and(|f| f.at_centre) {
         let (fx, fy) = app.centre();
         if let Some(cell) = pick::cell_of(&g, area, fx, fy) {
             pick::draw_crosshair(frame.buffer_mut(), cell);
