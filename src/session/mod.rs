@@ -842,6 +842,59 @@ mod tests {
         worker.shutdown();
     }
 
+    /// Wait for a film save to succeed.
+    fn film_saved(rx: &Receiver<SessionEvent>) {
+        loop {
+            match rx.recv_timeout(Duration::from_secs(60)) {
+                Ok(SessionEvent::FilmSaved(r)) => return r.map(|_| ()).unwrap(),
+                Ok(_) => {}
+                Err(e) => panic!("no film saved: {e}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_film_of_an_edited_scene_names_its_text_written_beside_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        let src = crate::scene::builtin::get("cornell").unwrap();
+        let moved = src.replace("position = [50, 52, 295.6]", "position = [45, 52, 290]");
+        let mut req = request(1, 3, IntegratorKind::Path);
+        req.scene.text = Some(moved.as_str().into());
+        worker.send(Command::Start(req.clone()));
+        let done = until(&rx, JobStatus::Done);
+        let film = dir.path().join("part.film");
+        worker.send_after_batch(Command::SaveFilm(film.clone()));
+        film_saved(&rx);
+        worker.shutdown();
+        // The film names the edited text, written beside it, not the built-in.
+        let side = dir.path().join("part.toml");
+        assert_eq!(std::fs::read_to_string(&side).unwrap(), moved);
+        let (h, film_data, _) = crate::io::film_file::read(&film).unwrap();
+        assert_eq!(h.scene, side.to_str().unwrap());
+        assert_eq!(
+            h.scene_hash,
+            crate::io::film_file::scene_hash(&h.scene).unwrap()
+        );
+        assert_eq!(bits(&film_data.mean_image()), bits(&done.image));
+        // An unedited scene's film names the scene itself.
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        req.scene.text = Some(src.into());
+        worker.send(Command::Start(req));
+        until(&rx, JobStatus::Done);
+        let plain = dir.path().join("plain.film");
+        worker.send_after_batch(Command::SaveFilm(plain.clone()));
+        film_saved(&rx);
+        worker.shutdown();
+        assert_eq!(
+            crate::io::film_file::read(&plain).unwrap().0.scene,
+            "cornell"
+        );
+        assert!(!dir.path().join("plain.toml").exists());
+    }
+
     #[test]
     fn of_the_starts_queued_only_the_newest_is_built() {
         let starts = |ids: &[u64]| -> Vec<Command> {
