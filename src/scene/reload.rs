@@ -4,12 +4,16 @@
 
 use super::camera::{build_camera, focus_camera};
 use super::description::SceneDesc;
-use super::load::{
-    base_dir, build_material, check_render_size, choose_accel, load_text, parse, BuildOptions,
-};
+use super::load::{base_dir, build_material, check_render_size, load_text, parse, BuildOptions};
 use super::sky::BUILTIN_SKY;
 use super::{Scene, SceneError};
+use crate::accel::flat::FlatScan;
+use crate::accel::{auto_choice, camera_probe, Accel, AccelChoice, BVH_CROSSOVER};
+use crate::camera::Camera;
+use crate::geometry::Primitive;
+use crate::settings::RenderSettings;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// The scene `spec` names built from `src`. `prev`, when given, is the same scene built from
@@ -63,6 +67,53 @@ fn with_camera(
         report,
         ..prev.clone()
     })
+}
+
+/// The accelerator the scene's `accel` (or the build options') asks for over `prims`, and the
+/// report's text for it. `auto`'s choice depends on the camera (whether the BVH tests fewer
+/// primitives than the flat scan for its rays): `reuse`, an accelerator built over the same
+/// primitives for another camera, is kept where the choice comes out the same, so a camera move
+/// does not build a BVH again; the result is the accelerator a build from scratch gives.
+pub(super) fn choose_accel(
+    desc: &SceneDesc,
+    camera: &Camera,
+    prims: &[Primitive],
+    options: &BuildOptions,
+    reuse: Option<&Arc<Accel>>,
+) -> (Arc<Accel>, String) {
+    let choice = options.accel.or(desc.accel).unwrap_or_default();
+    // Probe with the camera's rays at the image's aspect ratio: 32 rows are plenty to tell
+    // boxes that separate the objects from boxes that do not, at a cost of microseconds.
+    let size = RenderSettings::merged(&[&desc.render]);
+    let nx = ((32 * size.width) / size.height.max(1)).clamp(1, 128);
+    let probe = camera_probe(camera, nx, 32);
+    let text = |accel: &Accel, why: String| format!("{} ({why})", accel.describe(prims.len()));
+    if let Some(prev) = reuse {
+        match (choice, &**prev) {
+            (AccelChoice::Auto, Accel::Bvh(bvh)) if prims.len() >= BVH_CROSSOVER => {
+                let (keep, why) = auto_choice(bvh, prims.len(), &probe);
+                if keep {
+                    return (prev.clone(), text(prev, why));
+                }
+                let flat = Accel::Flat(FlatScan::new(prims));
+                let text = text(&flat, why);
+                return (Arc::new(flat), text);
+            }
+            // Forced, or below the crossover: the camera does not enter into it.
+            (AccelChoice::Flat | AccelChoice::Bvh, _) => {
+                return (prev.clone(), text(prev, "forced".into()))
+            }
+            (AccelChoice::Auto, Accel::Flat(_)) if prims.len() < BVH_CROSSOVER => {
+                let why = format!("auto: below the measured crossover of {BVH_CROSSOVER}");
+                return (prev.clone(), text(prev, why));
+            }
+            // A flat scan chosen for another camera: this one's rays may favour a BVH.
+            _ => {}
+        }
+    }
+    let (accel, why) = Accel::build(choice, prims, &probe, options.progress.as_deref());
+    let text = text(&accel, why);
+    (Arc::new(accel), text)
 }
 
 /// The checks the loader makes of a scene's text that need no file read and no geometry built:

@@ -19,6 +19,7 @@ pub mod graphics;
 mod help;
 pub mod layout;
 pub mod pick;
+mod pictures;
 pub mod preview;
 pub mod save;
 pub mod scene_form;
