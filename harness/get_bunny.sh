@@ -16,7 +16,8 @@ if [ -f "$out" ] && echo "$sha  $out" | sha256sum --check --status; then
 fi
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-(cd "$tmp" && npm pack --silent "bunny@$version" >/dev/null)
+# Bounded waits, so a registry that cannot be reached fails in a minute or two, not five.
+(cd "$tmp" && npm pack --silent --fetch-retries=1 --fetch-timeout=60000 "bunny@$version" >/dev/null)
 tarball="$tmp/bunny-$version.tgz"
 got="sha512-$(python3 -c 'import base64, hashlib, sys; print(base64.b64encode(hashlib.sha512(open(sys.argv[1], "rb").read()).digest()).decode())' "$tarball")"
 if [ "$got" != "$integrity" ]; then

@@ -46,38 +46,55 @@ from mitsuba_cornell_mesh import (
 )
 from mitsuba_passes import Passes
 
-MATERIAL_KEYS = {"color", "emission", "material", "ior", "name"}
+ROUGH_KEYS = {"alpha", "alpha_u", "alpha_v", "distribution", "eta", "k", "metal", "specular"}
+MATERIAL_KEYS = {"color", "emission", "material", "ior", "name"} | ROUGH_KEYS
 QUAD_KEYS = MATERIAL_KEYS | {"corner", "edge1", "edge2"}
 SPHERE_KEYS = MATERIAL_KEYS | {"center", "radius"}
 MESH_KEYS = MATERIAL_KEYS | {"path", "torus_knot", "smooth", "scale", "rotate", "translate"}
-TOP_KEYS = {"camera", "render", "quad", "sphere", "mesh", "background", "accel", "check"}
-# ptui's defaults (src/scene/load.rs): DEFAULT_COLOR, DEFAULT_IOR.
+TOP_KEYS = {
+    "camera", "render", "quad", "sphere", "mesh", "background", "environment", "accel", "check"
+}
+# ptui's defaults (src/scene/materials.rs): DEFAULT_COLOR, DEFAULT_IOR, DEFAULT_PLASTIC_IOR,
+# and SPECULAR_ALPHA (src/material/mod.rs), below which a rough material is built smooth.
 DEFAULT_COLOR = 0.75
 DEFAULT_IOR = 1.5
+DEFAULT_PLASTIC_IOR = 1.49
+SPECULAR_ALPHA = 1e-4
 
 
 def material(path, where, d, emissive_allowed):
-    """ptui's material fields of one object, with ptui's defaults."""
+    """ptui's material fields of one object, with ptui's defaults (src/scene/materials.rs; ptui
+    itself rejects keys given to a material they do not apply to)."""
     emission = rgb(path, f"{where}.emission", d.get("emission", 0))
     if emission.max() > 0 and not emissive_allowed:
-        fail(path, f"{where}.emission", "only quads may emit in this harness")
+        fail(path, f"{where}.emission", "only quads and spheres may emit in this harness")
     kind = d.get("material", "diffuse")
-    if kind not in ("diffuse", "mirror", "glass"):
-        fail(path, f"{where}.material", f"{kind!r} is not diffuse, mirror or glass")
+    if kind not in ("diffuse", "mirror", "glass", "conductor", "plastic"):
+        fail(path, f"{where}.material", f"{kind!r} is not a ptui material")
     if emission.max() > 0 and kind != "diffuse":
         fail(path, f"{where}.material", "an emitter must be diffuse")
-    # ptui: emitters do not reflect unless given a colour; others default to grey 0.75.
-    default_color = 0.0 if emission.max() > 0 else DEFAULT_COLOR
+    # ptui: emitters do not reflect unless given a colour; a conductor's colour is a factor on
+    # its reflectance (default 1); others default to grey 0.75.
+    default_color = 0.0 if emission.max() > 0 else 1.0 if kind == "conductor" else DEFAULT_COLOR
     color = rgb(path, f"{where}.color", d.get("color", default_color))
     if (color > 1).any():
         fail(path, f"{where}.color", "reflectance above 1")
-    if "ior" in d and kind != "glass":
-        fail(path, f"{where}.ior", "only glass has an ior")
+    alpha_u = float(d.get("alpha_u", d.get("alpha", 0.0)))
+    alpha_v = float(d.get("alpha_v", d.get("alpha", 0.0)))
+    rough = max(alpha_u, alpha_v) >= SPECULAR_ALPHA
     return {
         "kind": kind,
         "color": color,
         "emission": emission,
-        "ior": float(d.get("ior", DEFAULT_IOR)),
+        "ior": float(d.get("ior", DEFAULT_PLASTIC_IOR if kind == "plastic" else DEFAULT_IOR)),
+        # Mitsuba clamps alpha to 1e-4 as ptui does above SPECULAR_ALPHA.
+        "alpha_u": max(alpha_u, SPECULAR_ALPHA) if rough else 0.0,
+        "alpha_v": max(alpha_v, SPECULAR_ALPHA) if rough else 0.0,
+        "distribution": d.get("distribution", "ggx"),
+        "metal": d.get("metal"),
+        "eta": rgb(path, f"{where}.eta", d["eta"]) if "eta" in d else None,
+        "k": rgb(path, f"{where}.k", d["k"]) if "k" in d else None,
+        "specular": rgb(path, f"{where}.specular", d.get("specular", 1.0)),
     }
 
 
@@ -123,7 +140,7 @@ def read_scene(path):
                 "name": s.get("name", f"sphere {i}"),
                 "center": vec3(path, f"{where}.center", s.get("center")),
                 "radius": float(radius),
-                **material(path, where, s, emissive_allowed=False),
+                **material(path, where, s, emissive_allowed=True),
             }
         )
     meshes = []
@@ -135,9 +152,15 @@ def read_scene(path):
                 **material(path, where, m, emissive_allowed=False),
             }
         )
-    if not any(q["emission"].max() > 0 for q in quads):
-        fail(path, "quad", "no emissive quad")
-    return camera, background, quads, spheres, meshes
+    env = desc.get("environment")
+    if env is not None and (env.get("map") != "builtin:sky" or set(env) - {"map", "intensity"}):
+        fail(path, "environment", 'only map = "builtin:sky" with an intensity is supported')
+    sky = None if env is None else float(env.get("intensity", 1.0))
+    if sky is not None and background.max() > 0:
+        fail(path, "background", "both a background and an environment")
+    if not any(o["emission"].max() > 0 for o in quads + spheres) and sky is None:
+        fail(path, "quad", "no emitter and no environment")
+    return camera, (background, sky), quads, spheres, meshes
 
 
 def read_ply_normals(path):
@@ -157,23 +180,59 @@ def read_ply_normals(path):
     return data[:, 3:].astype(np.float64)
 
 
+def roughness(m):
+    """Mitsuba's roughness keys for a rough material: the distribution said outright (Mitsuba's
+    default is Beckmann, ptui's GGX) and alpha or alpha_u/alpha_v."""
+    out = {"distribution": m["distribution"]}
+    if m["alpha_u"] == m["alpha_v"]:
+        out["alpha"] = m["alpha_u"]
+    else:
+        out["alpha_u"], out["alpha_v"] = m["alpha_u"], m["alpha_v"]
+    return out
+
+
 def bsdf(m):
-    c = m["color"].tolist()
-    if m["kind"] == "diffuse":
-        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": c}}}
-    if m["kind"] == "mirror":
-        return {
-            "type": "conductor",
-            "material": "none",
-            "specular_reflectance": {"type": "rgb", "value": c},
+    """The Mitsuba BSDF of a ptui material. ptui's opaque materials scatter on both faces, so
+    Mitsuba's one-sided ones are wrapped in `twosided`; every interface is against exactly 1.0
+    outside (Mitsuba's default is air, 1.000277)."""
+    rgbv = lambda v: {"type": "rgb", "value": [float(x) for x in v]}
+    c = rgbv(m["color"])
+    kind = m["kind"]
+    rough = m.get("alpha_u", 0.0) > 0
+    if kind == "diffuse":
+        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": c}}
+    if kind == "mirror":
+        return {"type": "conductor", "material": "none", "specular_reflectance": c}
+    if kind == "glass":
+        out = {
+            "type": "roughdielectric" if rough else "dielectric",
+            "int_ior": m["ior"],
+            "ext_ior": 1.0,
+            "specular_reflectance": c,
+            "specular_transmittance": c,
         }
-    return {
-        "type": "dielectric",
-        "int_ior": m["ior"],
-        "ext_ior": 1.0,
-        "specular_reflectance": {"type": "rgb", "value": c},
-        "specular_transmittance": {"type": "rgb", "value": c},
-    }
+        return {**out, **roughness(m)} if rough else out
+    if kind == "conductor":
+        out = {"type": "roughconductor" if rough else "conductor", "specular_reflectance": c}
+        if m["metal"]:
+            # Mitsuba's own spectral data for the metal, integrated to RGB by Mitsuba.
+            out["material"] = m["metal"]
+        elif m["eta"] is not None:
+            out["eta"], out["k"] = rgbv(m["eta"]), rgbv(m["k"])
+        else:
+            out["material"] = "none"
+        return {"type": "twosided", "bsdf": {**out, **roughness(m)} if rough else out}
+    if kind == "plastic":
+        out = {
+            "type": "roughplastic" if rough else "plastic",
+            "diffuse_reflectance": c,
+            "specular_reflectance": rgbv(m["specular"]),
+            "int_ior": m["ior"],
+            "ext_ior": 1.0,
+            "nonlinear": False,
+        }
+        return {"type": "twosided", "bsdf": {**out, **roughness(m)} if rough else out}
+    raise SystemExit(f"no Mitsuba translation for material {kind!r}")
 
 
 def xtask():
@@ -188,10 +247,23 @@ def export_meshes(scene_path, workdir, root):
     subprocess.run(xtask() + ["export-meshes", scene_path, workdir], check=True, cwd=root)
 
 
-def build_scene(mi, camera, background, quads, spheres, meshes, width, height, workdir):
+def build_scene(mi, camera, background, quads, spheres, meshes, width, height, workdir, sky_map=None):
+    """`background` is (constant colour, builtin:sky intensity or None); `sky_map` ptui's sky,
+    as `cargo xtask sky-map` writes it, when the scene has one."""
     scene = base_scene(mi, camera, width, height)
+    background, intensity = background
     if background.max() > 0:
         scene["sky"] = {"type": "constant", "radiance": {"type": "rgb", "value": background.tolist()}}
+    if intensity is not None:
+        from mitsuba_sky import mitsuba_map
+
+        scene["sky"] = {
+            "type": "envmap",
+            "bitmap": mi.Bitmap(
+                mitsuba_map(sky_map).astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB
+            ),
+            "scale": intensity,
+        }
     for i, q in enumerate(quads):
         ply = os.path.join(workdir, f"quad{i}.ply")
         write_ply(ply, quad_vertices(q))
@@ -209,6 +281,12 @@ def build_scene(mi, camera, background, quads, spheres, meshes, width, height, w
             "radius": s["radius"],
             "bsdf": bsdf(s),
         }
+        if s["emission"].max() > 0:
+            # ptui's sphere lights are seen from outside here; Mitsuba's emit outwards.
+            scene[f"sphere{i}"]["emitter"] = {
+                "type": "area",
+                "radiance": {"type": "rgb", "value": s["emission"].tolist()},
+            }
     for m in meshes:
         ply = os.path.join(workdir, f"mesh{m['index']}.ply")
         normals = read_ply_normals(ply)
@@ -223,9 +301,14 @@ def build_scene(mi, camera, background, quads, spheres, meshes, width, height, w
     return scene
 
 
-def check_conventions(mi, scene, camera, background, quads, spheres, meshes):
+def check_conventions(mi, scene, camera, background, quads, spheres, meshes, sky_map=None):
     """Fail loudly if Mitsuba would not render what ptui does."""
     shapes = {s.id(): s for s in scene.shapes()}
+    background, intensity = background
+    if intensity is not None:
+        from mitsuba_sky import check_conventions as check_sky
+
+        check_sky(mi, scene, sky_map, intensity)
     # Lights: face normal edge1 x edge2, radiance the scene's along it.
     for i, q in enumerate(quads):
         if q["emission"].max() <= 0:
@@ -259,7 +342,7 @@ def check_conventions(mi, scene, camera, background, quads, spheres, meshes):
             if not np.allclose(got, background, rtol=1e-6):
                 raise SystemExit(f"constant sky gives {got}, not {background}")
         print(f"background: constant {background}")
-    elif emitters:
+    elif emitters and intensity is None:
         raise SystemExit("an environment emitter in a scene without background")
     # Materials, each checked at normal incidence from the outside (local +z).
     ctx = mi.BSDFContext()
@@ -285,6 +368,20 @@ def check_conventions(mi, scene, camera, background, quads, spheres, meshes):
             w = np.array(w, dtype=np.float64).ravel()
             if not np.allclose(w, c, rtol=1e-5):
                 raise SystemExit(f"{obj['name']}: mirror weight {w}, not {c}")
+        elif kind != "glass" or obj["alpha_u"] > 0:
+            # The microfacet materials are compared with ptui value for value by
+            # tests/integration/bsdf_mitsuba.rs (harness/mitsuba_bsdf_values.py); here: opaque
+            # ones reflect alike on both faces, as ptui's do.
+            if kind != "glass":
+                wi = mi.Vector3f(0.3, 0.2, 0.932738)
+                wo = mi.Vector3f(-0.4, 0.1, 0.911043)
+                si.wi = wi
+                up = np.array(b.eval(ctx, si, wo), dtype=np.float64).ravel()
+                si.wi = mi.Vector3f(wi.x, wi.y, -wi.z)
+                down = np.array(b.eval(ctx, si, mi.Vector3f(wo.x, wo.y, -wo.z)), dtype=np.float64).ravel()
+                si.wi = mi.Vector3f(0, 0, 1)
+                if not (up.max() > 0 and np.allclose(up, down, rtol=1e-5)):
+                    raise SystemExit(f"{obj['name']}: {kind} not two-sided: {up} above, {down} below")
         else:
             ior = obj["ior"]
             r = ((ior - 1) / (ior + 1)) ** 2
@@ -298,7 +395,8 @@ def check_conventions(mi, scene, camera, background, quads, spheres, meshes):
             eta = float(np.array(bs.eta).ravel()[0])
             if abs(eta - ior) > 1e-6 or not np.allclose(w, c / ior**2, rtol=1e-5):
                 raise SystemExit(f"{obj['name']}: glass refraction eta {eta}, weight {w}; wanted {ior}, {c / ior**2}")
-        print(f"{obj['name']}: {kind} {c}" + (f", ior {obj['ior']} in 1.0" if kind == "glass" else ""))
+        rough = f", alpha {obj['alpha_u']}x{obj['alpha_v']} {obj['distribution']}" if obj["alpha_u"] > 0 else ""
+        print(f"{obj['name']}: {kind} {c}" + (f", ior {obj['ior']} in 1.0" if kind in ("glass", "plastic") else "") + rough)
     # Meshes: Mitsuba holds the exported normals (smooth) or none (flat).
     for m in meshes:
         sid = f"mesh{m['index']}"
@@ -397,11 +495,18 @@ def main():
     with tempfile.TemporaryDirectory() as workdir:
         if meshes:
             export_meshes(scene_path, workdir, root)
+        sky_map = None
+        if background[1] is not None:
+            exr = os.path.join(workdir, "sky.exr")
+            subprocess.run(xtask() + ["sky-map", exr], check=True, cwd=root)
+            sky_map = read_exr(mi, exr)
         t_load = time.time()
-        desc = build_scene(mi, camera, background, quads, spheres, meshes, args.width, args.height, workdir)
+        desc = build_scene(
+            mi, camera, background, quads, spheres, meshes, args.width, args.height, workdir, sky_map
+        )
         scene = mi.load_dict(desc)
         load_seconds = time.time() - t_load
-        check_conventions(mi, scene, camera, background, quads, spheres, meshes)
+        check_conventions(mi, scene, camera, background, quads, spheres, meshes, sky_map)
 
         if args.time_spp:
             # The first render of a scene compiles its kernels (LLVM); time the later ones,

@@ -53,6 +53,15 @@ pub struct Ior(pub f64);
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NonNegative(pub f64);
 
+/// A microfacet roughness (Mitsuba's `alpha`) in [0, [`MAX_ALPHA`]].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Roughness(pub f64);
+
+/// The roughest `alpha` accepted: GGX at 1 already scatters like a diffuse surface with a
+/// grazing sheen, and glTF's roughness 1 maps to alpha 1. Beyond it the distributions are no
+/// longer surfaces anyone models.
+pub const MAX_ALPHA: f64 = 1.0;
+
 /// A vertical field of view in degrees, strictly between 0 and 180.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fov(pub f64);
@@ -222,6 +231,19 @@ impl<'de> Deserialize<'de> for NonNegative {
             Ok(NonNegative(v))
         } else {
             Err(de::Error::custom(format!("must be >= 0, got {v}")))
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Roughness {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = finite(f64::deserialize(d)?).map_err(de::Error::custom)?;
+        if (0.0..=MAX_ALPHA).contains(&v) {
+            Ok(Roughness(v))
+        } else {
+            Err(de::Error::custom(format!(
+                "roughness alpha must be between 0 (smooth) and {MAX_ALPHA}, got {v}"
+            )))
         }
     }
 }

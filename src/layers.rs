@@ -7,6 +7,8 @@ const LAYERS: &[(&str, u32)] = &[
     ("cpu", 1),
     ("checked", 1),
     ("progress", 1),
+    ("memory", 1),
+    ("input", 1),
     ("sampling", 2),
     ("settings", 3),
     ("geometry", 4),

@@ -2,6 +2,7 @@
 //! spheres of radius 1e5, and f32 loses the room (see `geometry::sphere`).
 
 mod dvec3;
+pub mod quadrature;
 
 pub use dvec3::DVec3;
 

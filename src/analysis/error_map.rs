@@ -22,10 +22,10 @@ pub enum ErrorMapError {
         "the error map needs at least 2 samples in every pixel (a standard error needs a variance)"
     )]
     TooFewSamples,
-    #[error("{}: cannot encode error map: {source}", .path.display())]
+    #[error("{}: cannot encode error map: {error}", .path.display())]
     Encode {
         path: PathBuf,
-        source: image::ImageError,
+        error: image::ImageError,
     },
     #[error(transparent)]
     Output(#[from] OutputError),
@@ -114,9 +114,9 @@ pub fn encode(path: &Path, film: &Film) -> Result<(Vec<u8>, ErrorMapScale), Erro
         }
         _ => return Err(ErrorMapError::Format(path.to_path_buf())),
     };
-    result.map_err(|source| ErrorMapError::Encode {
+    result.map_err(|error| ErrorMapError::Encode {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     Ok((bytes.into_inner(), scale))
 }

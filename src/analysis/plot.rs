@@ -37,7 +37,15 @@ pub enum PlotError {
     #[error("cannot draw the plot: {0}")]
     Draw(String),
     #[error("cannot encode the plot: {0}")]
-    Encode(#[from] image::ImageError),
+    Encode(image::ImageError),
+}
+
+// Not `#[from]`: that would make the image error this one's source too, and a chain printed
+// with `{:#}` would say it twice.
+impl From<image::ImageError> for PlotError {
+    fn from(e: image::ImageError) -> Self {
+        PlotError::Encode(e)
+    }
 }
 
 fn register() -> Result<(), PlotError> {

@@ -13,10 +13,12 @@ pub struct LinearImage {
 
 #[derive(Debug, thiserror::Error)]
 pub enum ReferenceError {
-    #[error("{}: cannot read reference image: {source}", .path.display())]
-    Read {
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
+    #[error("{}: cannot decode the reference image: {error}", .path.display())]
+    Decode {
         path: std::path::PathBuf,
-        source: image::ImageError,
+        error: image::ImageError,
     },
     #[error("{}: not a readable PFM image: {problem}", .path.display())]
     Pfm {
@@ -33,20 +35,23 @@ pub fn load(path: &Path) -> Result<LinearImage, ReferenceError> {
     let is_pfm = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("pfm"));
+    const WHAT: &str = "reference image";
     if is_pfm {
-        let bytes = std::fs::read(path).map_err(|e| ReferenceError::Pfm {
-            path: path.to_path_buf(),
-            problem: e.to_string(),
-        })?;
+        let source = crate::input::Source::Path(path.to_path_buf());
+        let bytes = crate::input::read(&source, WHAT, crate::input::Content::Binary)?;
         return parse_pfm(&bytes).map_err(|problem| ReferenceError::Pfm {
             path: path.to_path_buf(),
             problem,
         });
     }
-    let img = image::open(path).map_err(|source| ReferenceError::Read {
+    let decode = |error| ReferenceError::Decode {
         path: path.to_path_buf(),
-        source,
-    })?;
+        error,
+    };
+    let img = crate::input::ImageFile::read(path, WHAT)?
+        .reader()
+        .decode()
+        .map_err(decode)?;
     let rgb = img.into_rgb32f();
     Ok(LinearImage {
         width: rgb.width(),

@@ -12,7 +12,7 @@ use crate::io::output;
 use crate::render::build_pool;
 use crate::sampling::SamplerKind;
 use crate::scene::{self, builtin};
-use crate::settings::{IntegratorKind, RenderSettings, SettingsOverrides};
+use crate::settings::{IntegratorKind, RenderSettings, SettingsOverrides, Strategy};
 use anyhow::Context;
 use clap::Args;
 use std::fmt::Write as _;
@@ -40,6 +40,11 @@ pub struct ConvergeArgs {
     /// every sampler, each combination a series labelled e.g. `path/sobol`.
     #[arg(long, value_enum, value_delimiter = ',')]
     pub sampler: Vec<SamplerKind>,
+    /// Direct-light strategies of the `path` integrator to compare, comma-separated (default:
+    /// the scene's, mis): light sampling alone, BSDF sampling alone, both by MIS. Each is a
+    /// series of its own, labelled e.g. `path:light/sobol`.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub strategy: Vec<Strategy>,
     /// Worker threads (default: one per core).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -104,27 +109,50 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<ConvergeReport> {
     let cancel = AtomicBool::new(false);
 
     let combinations = convergence::combinations(&args.integrator, &args.sampler, base.sampler);
-    let series = convergence::run_grid(
-        &scene,
-        &base,
-        &combinations,
-        reference.as_ref(),
-        args.seconds,
-        &pool,
-        &cancel,
-        |(integrator, sampler), c| {
-            if !args.quiet {
-                let rmse = c.rmse.map(|e| format!("rmse {e:.5}  ")).unwrap_or_default();
-                println!(
-                    "{:>18} {:8.3} s {:6} spp  {rmse}est. rmse {:.5}",
-                    format!("{}/{}", integrator.name(), sampler.name()),
-                    c.seconds,
-                    c.spp,
-                    c.est_rmse
-                );
+    let mut series = Vec::new();
+    for (integrator, sampler) in combinations {
+        // The strategies asked for apply to `path`; every other integrator runs once.
+        let strategies: Vec<Option<Strategy>> =
+            if integrator == IntegratorKind::Path && !args.strategy.is_empty() {
+                args.strategy.iter().copied().map(Some).collect()
+            } else {
+                vec![None]
+            };
+        for strategy in strategies {
+            let name = match strategy {
+                Some(s) => format!("{}:{}", integrator.name(), s.name()),
+                None => integrator.name().to_string(),
+            };
+            let settings = RenderSettings {
+                strategy: strategy.unwrap_or(base.strategy),
+                ..base.clone()
+            };
+            for mut s in convergence::run_grid(
+                &scene,
+                &settings,
+                &[(integrator, sampler)],
+                reference.as_ref(),
+                args.seconds,
+                &pool,
+                &cancel,
+                |_, c| {
+                    if !args.quiet {
+                        let rmse = c.rmse.map(|e| format!("rmse {e:.5}  ")).unwrap_or_default();
+                        println!(
+                            "{:>18} {:8.3} s {:6} spp  {rmse}est. rmse {:.5}",
+                            format!("{name}/{}", sampler.name()),
+                            c.seconds,
+                            c.spp,
+                            c.est_rmse
+                        );
+                    }
+                },
+            )? {
+                s.integrator = name.clone();
+                series.push(s);
             }
-        },
-    )?;
+        }
+    }
 
     let metric = if reference.is_some() {
         Metric::Measured
@@ -262,11 +290,11 @@ fn summarise(
                     let _ = writeln!(
                         out,
                         "equal time ({t:.2} s): {} {n} / {} {n} = {ratio:.3} \
-                         (at 1/sqrt(t), {} needs {:.1}x the time for {}'s error)",
+                         (at 1/sqrt(t), {} needs {}x the time for {}'s error)",
                         other.label(),
                         base.label(),
                         other.label(),
-                        ratio * ratio,
+                        two_digits(ratio * ratio),
                         base.label(),
                         n = m.name(),
                     );
@@ -275,4 +303,28 @@ fn summarise(
         }
     }
     out
+}
+
+/// A positive ratio to two significant digits at least (0.00014, 0.012, 0.8, 14.3): a fixed
+/// number of decimals printed the ratio of MIS over light sampling on veach as 0.0.
+fn two_digits(x: f64) -> String {
+    if x > 0.0 && x < 0.1 {
+        let decimals = (-x.log10()).floor() as usize + 2;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.1}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::two_digits;
+
+    #[test]
+    fn ratios_keep_two_significant_digits() {
+        assert_eq!(two_digits(0.000144), "0.00014");
+        assert_eq!(two_digits(0.0123), "0.012");
+        assert_eq!(two_digits(0.8), "0.8");
+        assert_eq!(two_digits(14.26), "14.3");
+    }
 }

@@ -43,11 +43,7 @@ pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
         h.stats.samples as f64 / 1e6,
         h.stats.seconds
     );
-    println!(
-        "estimated error: rmse {:.5}, relative {:.5}",
-        err.rmse,
-        err.relative()
-    );
+    println!("estimated error: {err}");
     if !m.missing.is_empty() {
         eprintln!(
             "warning: passes {} are missing (a shard not rendered or not given): the image \

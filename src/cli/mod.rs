@@ -144,6 +144,10 @@ pub struct SettingsArgs {
     /// the ones seen directly only, or left to the camera paths.
     #[arg(long, value_enum)]
     pub caustics: Option<crate::settings::Caustics>,
+    /// Direct light (`path` only): light and BSDF sampling combined by MIS (the default), or
+    /// either alone, for comparison.
+    #[arg(long, value_enum)]
+    pub strategy: Option<crate::settings::Strategy>,
     /// Longest path in bounces (default: unlimited, Russian roulette ends paths).
     #[arg(long)]
     pub max_depth: Option<u32>,
@@ -196,6 +200,7 @@ impl SettingsArgs {
             integrator: self.integrator,
             sampler: self.sampler,
             caustics: self.caustics,
+            strategy: self.strategy,
             max_depth: self.max_depth,
             threads: self.threads.map(|t| t as usize),
             exposure: self.exposure,

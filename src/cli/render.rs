@@ -40,12 +40,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ..Default::default()
     };
     let scene = Arc::new(super::scene_progress::load(&spec, &options, args.quiet)?);
-    let hash = film_file::scene_hash(&spec).map_err(|e| anyhow::anyhow!("scene hash: {e}"))?;
-    let overrides = args.settings.overrides();
-    let mut settings = RenderSettings::resolve(&scene.render, &overrides, None);
-    if let Some((h, _, _)) = &resumed {
-        settings = resume_settings(args, h, &hash, settings)?;
-    }
     let output_path = match (&args.output, &args.resume) {
         (Some(o), _) => o.clone(),
         (None, Some(r)) => r.clone(),
@@ -56,6 +50,19 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .checkpoint
         .clone()
         .or_else(|| to_film.then(|| output_path.clone()));
+    // A film names its scene by path and hash, to be resumed or merged later; a render that
+    // reads or writes none needs neither (and a scene read from a pipe has no path to name).
+    let films = resumed.is_some() || args.pilot.is_some() || checkpoint.is_some();
+    let hash = if films {
+        film_file::scene_hash(&spec).map_err(|e| anyhow::anyhow!("scene hash: {e}"))?
+    } else {
+        String::new()
+    };
+    let overrides = args.settings.overrides();
+    let mut settings = RenderSettings::resolve(&scene.render, &overrides, None);
+    if let Some((h, _, _)) = &resumed {
+        settings = resume_settings(args, h, &hash, settings)?;
+    }
     if args.checkpoint_every.is_some() && checkpoint.is_none() {
         anyhow::bail!(
             "--checkpoint-every needs a film to write: --checkpoint FILE or -o FILE.film"
@@ -89,13 +96,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .flatten()
     {
         if film_file::is_film_path(path) {
-            check_dir_writable(path)?;
+            check_dir_writable(path, "a film")?;
         } else {
             output::check_writable(path)?;
         }
     }
     if let Some(path) = &args.error_map {
         error_map::check_format(path)?;
+        check_dir_writable(path, "the error map")?;
         if settings.spp < 2 {
             return Err(error_map::ErrorMapError::TooFewSamples.into());
         }
@@ -373,7 +381,8 @@ fn resume_settings(
 }
 
 /// A film's directory accepts a new file (probed as a save would write it).
-fn check_dir_writable(path: &Path) -> anyhow::Result<()> {
+/// Fail before rendering if `what` cannot be written at `path` (probed with a file beside it).
+fn check_dir_writable(path: &Path, what: &str) -> anyhow::Result<()> {
     if path.is_dir() {
         anyhow::bail!("{}: is a directory", path.display());
     }
@@ -384,7 +393,13 @@ fn check_dir_writable(path: &Path) -> anyhow::Result<()> {
     let probe = dir.join(format!(".ptui-probe.{}.tmp", std::process::id()));
     std::fs::File::create(&probe)
         .and_then(|_| std::fs::remove_file(&probe))
-        .with_context(|| format!("{}: cannot write a film there", path.display()))
+        .map_err(|e| {
+            anyhow::anyhow!(
+                "{}: cannot write {what} there: {}",
+                path.display(),
+                crate::input::os_reason(&e)
+            )
+        })
 }
 
 /// The end-of-render report: what was rendered, how fast, and what the scene build chose.
@@ -399,7 +414,7 @@ pub fn summary(r: &Renderer) -> String {
          invalid samples {invalid}\n\
          {report}; caustics: {caustics}{light_paths}\n\
          sampling: {sampling}\n\
-         estimated error: rmse {rmse:.5}, relative {rel:.5}\n\
+         estimated error: {err}\n\
          {stop}\n",
         name = r.scene.name,
         w = s.width,
@@ -434,8 +449,6 @@ pub fn summary(r: &Renderer) -> String {
         } else {
             String::new()
         },
-        rmse = err.rmse,
-        rel = err.relative(),
         stop = stop_reason(r),
     )
 }

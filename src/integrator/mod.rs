@@ -133,7 +133,9 @@ fn with_integrator<W: WithIntegrator>(
 ) -> W::Out {
     let max_depth = depth_limit(settings);
     match settings.integrator {
-        IntegratorKind::Path => w.paths::<path::PathState>((max_depth, caustics), |s| &mut s.path),
+        IntegratorKind::Path => {
+            w.paths::<path::PathState>((max_depth, caustics, settings.strategy), |s| &mut s.path)
+        }
         IntegratorKind::Naive => w.paths::<naive::NaivePath>(max_depth, |s| &mut s.naive),
         IntegratorKind::Painterly => w.painterly(),
     }

@@ -169,7 +169,7 @@ fn painterly_sample(
     stream: &PaintStream,
     depth: u32,
 ) -> Option<BsdfSample> {
-    match material.kind {
+    match &material.kind {
         MaterialKind::Diffuse => {
             // Two-sided, like the correct diffuse: the normal on the side the path arrived from.
             let ns = if wo.dot(nn.g) >= 0.0 { nn.s } else { -nn.s };
@@ -188,7 +188,7 @@ fn painterly_sample(
                 eta_scale: 1.0,
             })
         }
-        MaterialKind::Glass { ior } => {
+        &MaterialKind::Glass { ior } => {
             let entering = wo.dot(nn.g) > 0.0;
             let eta = if entering { ior } else { 1.0 / ior };
             if fresnel::dielectric(wo.dot(nn.g).abs(), eta).reflectance >= 1.0 {
@@ -202,5 +202,7 @@ fn painterly_sample(
                 .filter(|s| s.wi.is_finite() && s.weight.is_finite())
         }
         MaterialKind::Mirror => material.sample(wo, nn, 0.0, (0.0, 0.0)),
+        // Not painted ([`paints`]): their own sample is taken instead.
+        MaterialKind::Glossy(_) | MaterialKind::SmoothConductor(_) => None,
     }
 }

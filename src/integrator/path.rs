@@ -17,6 +17,7 @@ use crate::math::{max_component, DVec3, Ray};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::settings::Strategy;
 
 /// The camera sample and the first `SEQUENCE_DEPTH` vertices draw their numbers from the Sobol
 /// sequence; deeper vertices hash theirs ([`Sampler::leave_sequence`]): there the sequence's
@@ -38,8 +39,9 @@ pub fn radiance(
     sampler: &mut Sampler,
     max_depth: u32,
     caustics: Option<CausticPass>,
+    strategy: Strategy,
 ) -> DVec3 {
-    radiance_one::<PathState>(scene, ray, sampler, (max_depth, caustics))
+    radiance_one::<PathState>(scene, ray, sampler, (max_depth, caustics, strategy))
 }
 
 /// The shadow rays one vertex asks for; their values already carry the path throughput and
@@ -154,8 +156,8 @@ impl Chains {
 }
 
 impl StreamPath for PathState {
-    /// The depth limit and the pass's caustics.
-    type Row<'r> = (u32, Option<CausticPass<'r>>);
+    /// The depth limit, the pass's caustics and the direct-light strategy.
+    type Row<'r> = (u32, Option<CausticPass<'r>>, Strategy);
     type Shadows = Shadows;
 
     #[inline(always)]
@@ -177,7 +179,7 @@ impl StreamPath for PathState {
         row: Self::Row<'_>,
         shadows: &mut Shadows,
     ) -> bool {
-        PathState::vertex(self, scene, hit, sampler, row.0, row.1, shadows)
+        PathState::vertex(self, scene, hit, sampler, row, shadows)
     }
 
     #[inline(always)]
@@ -222,19 +224,18 @@ impl PathState {
         scene: &Scene,
         hit: Option<&Hit>,
         sampler: &mut Sampler,
-        max_depth: u32,
-        caustics: Option<CausticPass>,
+        (max_depth, caustics, strategy): (u32, Option<CausticPass>, Strategy),
         shadows: &mut Shadows,
     ) -> bool {
         *shadows = Shadows::default();
         let Some(hit) = hit else {
-            self.miss(scene);
+            self.miss(scene, strategy);
             return false;
         };
-        if !self.arrive(scene, hit, max_depth, caustics) {
+        if !self.arrive(scene, hit, max_depth, caustics, strategy) {
             return false;
         }
-        shadows.light = self.light(scene, hit, sampler);
+        shadows.light = self.light(scene, hit, sampler, strategy);
         shadows.join = self.join(scene, hit, sampler, caustics);
         self.leave(scene, hit, sampler, caustics)
     }
@@ -242,11 +243,18 @@ impl PathState {
     /// The path left the scene: the background's radiance, or the environment map's weighted
     /// against light sampling, which could have chosen the same direction.
     #[inline(always)]
-    fn miss(&mut self, scene: &Scene) {
+    fn miss(&mut self, scene: &Scene, strategy: Strategy) {
         match &scene.environment {
             None => self.l += self.beta * scene.background,
             Some(_) => {
-                let w = env_mis_weight(scene, self.specular, self.prev_pdf_bsdf, self.ray.d);
+                let w = match strategy {
+                    Strategy::Mis => {
+                        env_mis_weight(scene, self.specular, self.prev_pdf_bsdf, self.ray.d)
+                    }
+                    // Light sampling counts the map wherever it could have sampled it.
+                    Strategy::Light if !self.specular => 0.0,
+                    Strategy::Light | Strategy::Bsdf => 1.0,
+                };
                 self.l += self.beta * scene.sky(self.ray.d) * w;
             }
         }
@@ -261,9 +269,10 @@ impl PathState {
         hit: &Hit,
         max_depth: u32,
         caustics: Option<CausticPass>,
+        strategy: Strategy,
     ) -> bool {
         let ray = self.ray;
-        let nee = scene.has_lights();
+        let nee = scene.has_lights() && strategy != Strategy::Bsdf;
         let connect = joinable(caustics);
         let material = scene.material(hit);
         let prim = &scene.prims[hit.prim as usize];
@@ -283,6 +292,13 @@ impl PathState {
                         power_heuristic(1.0, connection_ratio(p_light, pdf * cos_z))
                     }
                     _ => 1.0,
+                }
+            } else if strategy == Strategy::Light {
+                // Light sampling alone counts every light it can sample.
+                if prim.light.is_some() {
+                    0.0
+                } else {
+                    1.0
                 }
             } else {
                 emission_mis_weight(
@@ -320,18 +336,25 @@ impl PathState {
 
     /// Light sampling's shadow ray from a scattering hit.
     #[inline(always)]
-    fn light(&self, scene: &Scene, hit: &Hit, sampler: &mut Sampler) -> Option<Shadow> {
+    fn light(
+        &self,
+        scene: &Scene,
+        hit: &Hit,
+        sampler: &mut Sampler,
+        strategy: Strategy,
+    ) -> Option<Shadow> {
         let material = scene.material(hit);
         if !scene.has_lights() {
             return None;
         }
-        if material.is_delta() {
+        if material.is_delta() || strategy == Strategy::Bsdf {
             // Keep the dimension count per bounce fixed so samplers stay aligned.
             sampler.get_1d_if(false);
             sampler.get_2d_if(false);
             return None;
         }
-        light_shadow(scene, hit, -self.ray.d, material, sampler, true, self.beta)
+        let mis = strategy == Strategy::Mis;
+        light_shadow(scene, hit, -self.ray.d, material, sampler, mis, self.beta)
     }
 
     /// The caustic join's shadow ray from a scattering hit, if the pass has light-path ends.
@@ -564,7 +587,7 @@ mod stream_tests {
                     let (x, y) = (i % 20 * 16 + 8, i / 20 * 24 + 12);
                     let ray = scene.camera.ray(320, 240, x as f64, y as f64);
                     let mut sampler = Sampler::new(SamplerKind::Sobol, 1, y * 320 + x, 0);
-                    radiance(&scene, ray, &mut sampler, max_depth, None);
+                    radiance(&scene, ray, &mut sampler, max_depth, None, Strategy::Mis);
                     !sampler.in_sequence()
                 })
                 .count()

@@ -18,7 +18,7 @@ use crate::render::adaptive::SampleMap;
 use crate::render::film::{Film, PixelState};
 use crate::render::RenderStats;
 use crate::sampling::SamplerKind;
-use crate::settings::{Caustics, IntegratorKind, RenderSettings, Tonemap};
+use crate::settings::{Caustics, IntegratorKind, RenderSettings, Strategy, Tonemap};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -40,11 +40,10 @@ const MAX_HEADER: u32 = 1 << 20;
 
 #[derive(Debug, thiserror::Error)]
 pub enum FilmFileError {
-    #[error("{}: {source}", .path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    #[error("{}: {reason}", .path.display())]
+    Io { path: PathBuf, reason: String },
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
     #[error("{}: not a ptui film file ({why})", .path.display())]
     NotAFilm { path: PathBuf, why: String },
     #[error("{}: film format version {found}, this ptui reads version {FORMAT_VERSION}", .path.display())]
@@ -135,6 +134,9 @@ pub struct FilmHeader {
     pub sampler: SamplerKind,
     pub integrator: IntegratorKind,
     pub caustics: Caustics,
+    /// Absent: `mis` (films written before the setting existed).
+    #[serde(default, skip_serializing_if = "is_mis")]
+    pub strategy: Strategy,
     /// Longest path in bounces; absent = unlimited.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_depth: Option<u32>,
@@ -189,6 +191,7 @@ impl FilmHeader {
             sampler: settings.sampler,
             integrator: settings.integrator,
             caustics: settings.caustics,
+            strategy: settings.strategy,
             max_depth: settings.max_depth,
             adaptive: settings.adaptive,
             painterly: settings.painterly.to_string(),
@@ -218,6 +221,7 @@ impl FilmHeader {
             ("sampler", self.sampler.name().to_string()),
             ("integrator", self.integrator.name().to_string()),
             ("caustics", self.caustics.name().to_string()),
+            ("strategy", self.strategy.name().to_string()),
             (
                 "max_depth",
                 self.max_depth
@@ -318,6 +322,10 @@ fn is_zero(v: &u32) -> bool {
     *v == 0
 }
 
+fn is_mis(s: &Strategy) -> bool {
+    *s == Strategy::Mis
+}
+
 impl FilmHeader {
     /// The settings layer that renders this film's image (for the TUI's request).
     pub fn overrides(&self) -> crate::settings::SettingsOverrides {
@@ -329,6 +337,7 @@ impl FilmHeader {
             sampler: Some(self.sampler),
             integrator: Some(self.integrator),
             caustics: Some(self.caustics),
+            strategy: Some(self.strategy),
             max_depth: self.max_depth,
             exposure: Some(self.exposure),
             tonemap: Some(self.tonemap),
@@ -355,14 +364,20 @@ impl FilmHeader {
 /// preceded by its path as written and its length), so a changed OBJ beside an unchanged
 /// scene file is another scene. `spec` is what `ptui render` takes: a file, else a built-in.
 pub fn scene_hash(spec: &str) -> Result<String, String> {
-    let path = Path::new(spec);
-    let (src, base) = if path.is_file() {
-        let src = std::fs::read_to_string(path).map_err(|e| format!("{spec}: {e}"))?;
-        (src, path.parent().map(Path::to_path_buf))
-    } else if let Some(src) = crate::scene::builtin::get(spec) {
-        (src.to_string(), None)
-    } else {
-        return Err(format!("{spec}: no such scene file or built-in scene"));
+    use crate::scene::load::{scene_text, SceneText};
+    let (src, base) = match scene_text(spec).map_err(|e| e.to_string())? {
+        // A film names its scene to load it again: a pipe cannot be read twice.
+        SceneText::Read { base_dir: None, .. } => {
+            return Err(format!(
+                "{spec}: a film needs its scene in a file (it is read again to resume or merge), \
+                 not a pipe or standard input"
+            ))
+        }
+        SceneText::Read {
+            text,
+            base_dir: Some(base),
+        } => (text, Some(base)),
+        SceneText::Builtin(src) => (src.to_string(), None),
     };
     let mut h = Sha256::new();
     h.update((src.len() as u64).to_le_bytes());
@@ -374,7 +389,9 @@ pub fn scene_hash(spec: &str) -> Result<String, String> {
                 Some(b) => b.join(p.get_ref()),
                 None => PathBuf::from(p.get_ref()),
             };
-            let bytes = std::fs::read(&full).map_err(|e| format!("{}: {e}", full.display()))?;
+            let source = crate::input::Source::Path(full);
+            let bytes = crate::input::read(&source, "OBJ file", crate::input::Content::Binary)
+                .map_err(|e| e.to_string())?;
             h.update((p.get_ref().len() as u64).to_le_bytes());
             h.update(p.get_ref().as_bytes());
             h.update((bytes.len() as u64).to_le_bytes());
@@ -457,9 +474,9 @@ pub fn write(
     film: &Film,
     map: Option<&SampleMap>,
 ) -> Result<(), FilmFileError> {
-    let io = |source| FilmFileError::Io {
+    let io = |e: std::io::Error| FilmFileError::Io {
         path: path.to_path_buf(),
-        source,
+        reason: crate::input::os_reason(&e),
     };
     let mut header = header.clone();
     header.map_start = map.map(SampleMap::start);
@@ -490,7 +507,7 @@ pub fn write(
         inner.flush()
     })
     .map_err(|e| match e {
-        crate::io::output::OutputError::Io { source, .. } => io(source),
+        crate::io::output::OutputError::Io { error, .. } => io(error),
         other => io(std::io::Error::other(other.to_string())),
     })
 }
@@ -505,9 +522,13 @@ pub struct FilmReader {
 /// Open `path` and read its header, checking the magic, version and the file's size.
 pub fn open(path: &Path) -> Result<FilmReader, FilmFileError> {
     let p = || path.to_path_buf();
-    let io = |source| FilmFileError::Io { path: p(), source };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let len = file.metadata().map_err(io)?.len();
+    let io = |e: std::io::Error| FilmFileError::Io {
+        path: p(),
+        reason: crate::input::os_reason(&e),
+    };
+    // A regular file only (its length is checked against the header): a directory, a device or
+    // a pipe is refused before anything is read.
+    let (file, len) = crate::input::open_regular(path, "film file")?;
     let mut reader = CrcRead {
         inner: BufReader::with_capacity(1 << 20, file),
         crc: crc32fast::Hasher::new(),
@@ -574,10 +595,10 @@ pub fn open(path: &Path) -> Result<FilmReader, FilmFileError> {
 }
 
 impl FilmReader {
-    fn io(&self, source: std::io::Error) -> FilmFileError {
+    fn io(&self, e: std::io::Error) -> FilmFileError {
         FilmFileError::Io {
             path: self.path.clone(),
-            source,
+            reason: crate::input::os_reason(&e),
         }
     }
 

@@ -12,15 +12,15 @@ use std::path::{Path, PathBuf};
 pub enum OutputError {
     #[error("{}: unsupported image format (use .png or .exr)", .0.display())]
     Format(PathBuf),
-    #[error("{}: cannot encode image: {source}", .path.display())]
+    #[error("{}: cannot encode image: {error}", .path.display())]
     Encode {
         path: PathBuf,
-        source: image::ImageError,
+        error: image::ImageError,
     },
-    #[error("{}: cannot write: {source}", .path.display())]
+    #[error("{}: cannot write: {}", .path.display(), crate::input::os_reason(.error))]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
 }
 
@@ -65,10 +65,10 @@ pub fn encode(
     let format = format(path)?;
     let pixel = linear_pixels(path, (width, height), linear)?;
     let mut bytes = Cursor::new(Vec::new());
-    encode_pixels(&mut bytes, format, (width, height), pixel, exposure, op).map_err(|source| {
+    encode_pixels(&mut bytes, format, (width, height), pixel, exposure, op).map_err(|error| {
         OutputError::Encode {
             path: path.to_path_buf(),
-            source,
+            error,
         }
     })?;
     Ok(bytes.into_inner())
@@ -213,9 +213,9 @@ fn write_image_atomic(
         w.flush()
     });
     match failed {
-        Some(source) => Err(OutputError::Encode {
+        Some(error) => Err(OutputError::Encode {
             path: path.to_path_buf(),
-            source,
+            error,
         }),
         None => written,
     }
@@ -234,9 +234,9 @@ pub fn write_atomic_with(
     data: &[u8],
     write: impl FnOnce(&mut std::fs::File, &[u8]) -> std::io::Result<()>,
 ) -> Result<(), OutputError> {
-    let io = |source| OutputError::Io {
+    let io = |error| OutputError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     };
     let tmp = temp_path(path).map_err(io)?;
     let result = (|| {
@@ -272,9 +272,9 @@ fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
 /// removing the temporary file a save would use; the target itself is not touched).
 pub fn check_writable(path: &Path) -> Result<(), OutputError> {
     encode(path, 1, 1, &[0.0; 3], 1.0, Tonemap::Clamp)?;
-    let io = |source| OutputError::Io {
+    let io = |error| OutputError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     };
     if path.is_dir() {
         return Err(io(std::io::Error::other("is a directory")));

@@ -20,6 +20,7 @@
 //! the Jacobian of (u, v) -> direction.
 
 use super::sky;
+use crate::input::ImageFile;
 use crate::math::{luminance, DVec3};
 use crate::sampling::distribution::Distribution2D;
 use std::f64::consts::PI;
@@ -42,17 +43,13 @@ impl EnvMap {
     /// is decoded, and every texel must be finite and non-negative.
     pub fn read(path: &Path) -> Result<EnvMap, String> {
         let shown = path.display();
-        let open = || {
-            image::ImageReader::open(path)
-                .map_err(|e| format!("{shown}: cannot open the environment map: {e}"))?
-                .with_guessed_format()
-                .map_err(|e| format!("{shown}: cannot read the environment map: {e}"))
-        };
-        let (width, height) = open()?
+        let file = ImageFile::read(path, "environment map").map_err(|e| e.to_string())?;
+        let (width, height) = file
+            .reader()
             .into_dimensions()
             .map_err(|e| format!("{shown}: not a readable EXR or HDR image: {e}"))?;
         check_size(width as u64, height as u64).map_err(|e| format!("{shown}: {e}"))?;
-        let mut reader = open()?;
+        let mut reader = file.reader();
         // The decoder's own allocation limit (512 MiB) would refuse some maps MAX_TEXELS
         // admits; the size was checked above.
         reader.no_limits();

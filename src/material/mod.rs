@@ -1,33 +1,122 @@
 //! Materials: a closed set dispatched by `match`, each able to sample a direction (with the
 //! weight f cos / pdf) and, for the non-delta ones, to evaluate f cos and the pdf for MIS.
+//! smallpt's three (diffuse, mirror, smooth glass) live here; the microfacet materials have a
+//! file each (`conductor`, `dielectric`, `plastic`) over one distribution (`microfacet`) and
+//! one choice of local frame (`shading`).
 //!
 //! ```toml
 //! [[sphere]]
-//! material = "glass"   # diffuse (default) | mirror | glass
+//! material = "glass"   # diffuse (default) | mirror | glass | conductor | plastic
 //! color = 0.999        # reflectance / transmittance tint; a number or [r, g, b]
-//! ior = 1.5            # glass only
+//! ior = 1.5            # glass and plastic
+//! alpha = 0.05         # glass, conductor, plastic: microfacet roughness (0: smooth)
 //! emission = [12, 12, 12]
 //! ```
 
+pub mod conductor;
+pub mod dielectric;
 pub mod fresnel;
+pub mod metals;
+pub mod microfacet;
+pub mod plastic;
+pub mod shading;
+
+pub use conductor::{Conductor, ConductorFresnel};
+pub use dielectric::RoughDielectric;
+pub use microfacet::{Distribution, Microfacet};
+pub use plastic::Plastic;
 
 use crate::geometry::Normals;
 use crate::math::{DVec3, Frame};
 use crate::sampling::warp;
 use std::f64::consts::FRAC_1_PI;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Below this roughness a microfacet material is built as its smooth (delta) form: its lobe is
+/// narrower than a ten-thousandth of a radian, far below a pixel of any camera ptui renders,
+/// and its albedo differs from the smooth form's only at grazing angles beyond 89.99 degrees,
+/// while light sampling towards it would only waste shadow rays. It is also where Mitsuba clamps
+/// its rough materials' alpha. Tested in `tests/integration/materials.rs`.
+pub const SPECULAR_ALPHA: f64 = 1e-4;
+
+/// The materials. smallpt's three come first and small; every later one is behind the one
+/// pointer of [`MaterialKind::Glossy`], so that matching the three stays the one compare it was
+/// and their code stays as small: with the microfacet materials as variants of their own the
+/// hot loop of `cornell` ran 9% more instructions (benches/HISTORY.md#materials).
+#[derive(Clone, Debug, PartialEq)]
 pub enum MaterialKind {
     /// Lambertian reflection.
     Diffuse,
+    /// A rough metal, rough glass or plastic (smooth or rough).
+    Glossy(Box<Glossy>),
     /// Perfect specular reflection.
     Mirror,
     /// Smooth dielectric with exact Fresnel: reflection, refraction, total internal reflection.
     /// `ior` is the inside index over the outside one (the outside is vacuum).
     Glass { ior: f64 },
+    /// A smooth metal: the mirror's delta reflection with the conductor's Fresnel reflectance.
+    /// The delta materials come last, so that [`Material::is_delta`] is one compare.
+    SmoothConductor(Box<ConductorFresnel>),
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The materials beyond smallpt's.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Glossy {
+    /// A rough metal.
+    Conductor(Conductor),
+    /// Glass with a rough surface.
+    RoughGlass(RoughDielectric),
+    /// A diffuse base under a smooth or rough dielectric coat.
+    Plastic(Plastic),
+}
+
+impl Glossy {
+    /// Boxed as a [`MaterialKind`].
+    pub fn kind(self) -> MaterialKind {
+        MaterialKind::Glossy(Box::new(self))
+    }
+}
+
+impl MaterialKind {
+    /// The name a scene file gives this material, with its roughness where it has one: what
+    /// the summaries list.
+    pub fn describe(&self) -> String {
+        let alpha = |d: &Distribution| {
+            let kind = match d.kind {
+                Microfacet::Ggx => "",
+                Microfacet::Beckmann => " beckmann",
+            };
+            if d.alpha_u == d.alpha_v {
+                format!(" (alpha {}{kind})", d.alpha_u)
+            } else {
+                format!(" (alpha {}x{}{kind})", d.alpha_u, d.alpha_v)
+            }
+        };
+        match self {
+            MaterialKind::Diffuse => "diffuse".into(),
+            MaterialKind::Mirror => "mirror".into(),
+            MaterialKind::Glass { .. } => "glass".into(),
+            MaterialKind::SmoothConductor(_) => "conductor".into(),
+            MaterialKind::Glossy(g) => match g.as_ref() {
+                Glossy::RoughGlass(g) => format!("glass{}", alpha(&g.distribution)),
+                Glossy::Conductor(c) => format!("conductor{}", alpha(&c.distribution)),
+                Glossy::Plastic(p) => {
+                    format!("plastic{}", p.distribution().map_or(String::new(), alpha))
+                }
+            },
+        }
+    }
+
+    /// Whether this is one of smallpt's materials (diffuse, mirror, smooth glass), the ones the
+    /// light tracer handles.
+    pub fn is_smallpt(&self) -> bool {
+        matches!(
+            self,
+            MaterialKind::Diffuse | MaterialKind::Mirror | MaterialKind::Glass { .. }
+        )
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub kind: MaterialKind,
     /// Reflectance (diffuse, mirror) or tint (glass), linear RGB in [0, 1].
@@ -64,6 +153,13 @@ pub struct BsdfEval {
     pub pdf: f64,
 }
 
+impl BsdfEval {
+    pub const ZERO: BsdfEval = BsdfEval {
+        f_cos: DVec3::ZERO,
+        pdf: 0.0,
+    };
+}
+
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
@@ -89,17 +185,25 @@ impl Material {
 
     /// True when every lobe is a delta: next-event estimation is useless here.
     pub fn is_delta(&self) -> bool {
-        !matches!(self.kind, MaterialKind::Diffuse)
+        matches!(
+            self.kind,
+            MaterialKind::Mirror | MaterialKind::Glass { .. } | MaterialKind::SmoothConductor(_)
+        )
     }
 
     /// Which of [`Material::sample`]'s random numbers it reads: (`u_lobe`, `u`). The integrators
     /// skip computing the others (the sampler still advances, so every path keeps its numbers).
     #[inline]
     pub fn sample_uses(&self) -> (bool, bool) {
-        match self.kind {
+        match &self.kind {
             MaterialKind::Diffuse => (false, true),
             MaterialKind::Mirror => (false, false),
             MaterialKind::Glass { .. } => (true, false),
+            MaterialKind::SmoothConductor(_) => (false, false),
+            MaterialKind::Glossy(g) => match g.as_ref() {
+                Glossy::Conductor(_) => (false, true),
+                Glossy::RoughGlass(_) | Glossy::Plastic(_) => (true, true),
+            },
         }
     }
 
@@ -117,7 +221,7 @@ impl Material {
     pub fn sample(&self, wo: DVec3, nn: Normals, u_lobe: f64, u: (f64, f64)) -> Option<BsdfSample> {
         let n = nn.g;
         let cos_o = wo.dot(n);
-        match self.kind {
+        match &self.kind {
             MaterialKind::Diffuse => {
                 // Two-sided: reflect on the side the path arrived from.
                 let ns = if cos_o >= 0.0 { nn.s } else { -nn.s };
@@ -138,13 +242,7 @@ impl Material {
                 })
             }
             MaterialKind::Mirror => {
-                let mut wi = reflect(wo, n);
-                if nn.smooth() {
-                    let ws = reflect(wo, nn.s);
-                    if wo.dot(nn.s) * cos_o > 0.0 && ws.dot(n) * cos_o > 0.0 {
-                        wi = ws;
-                    }
-                }
+                let (wi, _) = mirror_direction(wo, nn, cos_o);
                 Some(BsdfSample {
                     wi,
                     weight: self.color,
@@ -153,7 +251,7 @@ impl Material {
                     eta_scale: 1.0,
                 })
             }
-            MaterialKind::Glass { ior } => {
+            &MaterialKind::Glass { ior } => {
                 let entering = cos_o > 0.0;
                 let n = if nn.smooth() && glass_frame_holds(wo, nn, entering, ior) {
                     nn.s
@@ -190,6 +288,45 @@ impl Material {
                     })
                 }
             }
+            MaterialKind::Glossy(g) => self.sample_glossy(g, wo, nn, u_lobe, u),
+            MaterialKind::SmoothConductor(fresnel) => self.sample_smooth_conductor(fresnel, wo, nn),
+        }
+    }
+
+    /// The smooth conductor's delta lobe: the mirror's direction, weighted by the conductor's
+    /// Fresnel reflectance there. Out of line as [`Material::sample_glossy`].
+    #[inline(never)]
+    fn sample_smooth_conductor(
+        &self,
+        fresnel: &ConductorFresnel,
+        wo: DVec3,
+        nn: Normals,
+    ) -> Option<BsdfSample> {
+        let (wi, normal) = mirror_direction(wo, nn, wo.dot(nn.g));
+        Some(BsdfSample {
+            wi,
+            weight: self.color * fresnel.reflectance(wo.dot(normal).abs()),
+            pdf: 1.0,
+            delta: true,
+            eta_scale: 1.0,
+        })
+    }
+
+    /// [`Material::sample`] of the materials after smallpt's, kept out of line so that the
+    /// smallpt materials' inlined code stays as small as it was (benches/HISTORY.md#materials).
+    #[inline(never)]
+    fn sample_glossy(
+        &self,
+        g: &Glossy,
+        wo: DVec3,
+        nn: Normals,
+        u_lobe: f64,
+        u: (f64, f64),
+    ) -> Option<BsdfSample> {
+        match g {
+            Glossy::Conductor(c) => c.sample(self.color, wo, nn, u),
+            Glossy::RoughGlass(g) => g.sample(self.color, wo, nn, u_lobe, u),
+            Glossy::Plastic(p) => p.sample(self.color, wo, nn, u_lobe, u),
         }
     }
 
@@ -249,9 +386,14 @@ impl Material {
     /// the rounding of the cosine (a unit vector's dot product with itself can be 1 + 1 ulp).
     #[inline]
     pub fn f_cos_bound(&self) -> DVec3 {
-        match self.kind {
+        match &self.kind {
             MaterialKind::Diffuse => self.color * FRAC_1_PI,
-            _ => DVec3::ZERO,
+            MaterialKind::Mirror
+            | MaterialKind::Glass { .. }
+            | MaterialKind::SmoothConductor(_) => DVec3::ZERO,
+            // Unbounded (a microfacet peak grows as 1 / alpha^2); the light tracer that reads
+            // the bound is not built with these materials.
+            MaterialKind::Glossy(_) => DVec3::splat(f64::INFINITY),
         }
     }
 
@@ -261,9 +403,9 @@ impl Material {
     /// normal's (turned to that side), clamped at 0 where `wi` falls behind it, which is where
     /// [`Material::sample`]'s pdf is 0 too. f itself stays color / pi for any `wo` on the side,
     /// so a `wo` behind the shading normal (silhouettes, grazing views) is still lit.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wo: DVec3, wi: DVec3, nn: Normals) -> BsdfEval {
-        match self.kind {
+        match &self.kind {
             MaterialKind::Diffuse => {
                 let n = nn.g;
                 let (co, ci) = (wo.dot(n), wi.dot(n));
@@ -284,10 +426,20 @@ impl Material {
                     pdf: cos * FRAC_1_PI,
                 }
             }
-            _ => BsdfEval {
-                f_cos: DVec3::ZERO,
-                pdf: 0.0,
-            },
+            MaterialKind::Mirror
+            | MaterialKind::Glass { .. }
+            | MaterialKind::SmoothConductor(_) => BsdfEval::ZERO,
+            MaterialKind::Glossy(g) => self.eval_glossy(g, wo, wi, nn),
+        }
+    }
+
+    /// [`Material::eval`] of the glossy materials, out of line as [`Material::sample_glossy`].
+    #[inline(never)]
+    fn eval_glossy(&self, g: &Glossy, wo: DVec3, wi: DVec3, nn: Normals) -> BsdfEval {
+        match g {
+            Glossy::Conductor(c) => c.eval(self.color, wo, wi, nn),
+            Glossy::RoughGlass(g) => g.eval(self.color, wo, wi, nn),
+            Glossy::Plastic(p) => p.eval(self.color, wo, wi, nn),
         }
     }
 }
@@ -311,6 +463,21 @@ fn glass_frame_holds(wo: DVec3, nn: Normals, entering: bool, ior: f64) -> bool {
     }
     let wt = -wo / eta + nf * (cos_i / eta - f.cos_t);
     wt.dot(nn.g) * cos_g < 0.0
+}
+
+/// The mirror direction of `wo` (at `cos_o` = wo . g) and the normal it reflects about: the
+/// shading normal where `wo` is in front of it and the reflection stays on `wo`'s geometric
+/// side, else the geometric normal.
+#[inline(always)]
+fn mirror_direction(wo: DVec3, nn: Normals, cos_o: f64) -> (DVec3, DVec3) {
+    let n = nn.g;
+    if nn.smooth() {
+        let ws = reflect(wo, nn.s);
+        if wo.dot(nn.s) * cos_o > 0.0 && ws.dot(n) * cos_o > 0.0 {
+            return (ws, nn.s);
+        }
+    }
+    (reflect(wo, n), n)
 }
 
 /// Mirror `wo` about the normal (either orientation of `n` gives the same result).
@@ -338,7 +505,7 @@ mod tests {
             for _ in 0..20_000 {
                 let color = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
                 let m = Material {
-                    kind,
+                    kind: kind.clone(),
                     color,
                     emission: DVec3::ZERO,
                     one_sided: false,
@@ -351,7 +518,7 @@ mod tests {
     #[test]
     fn f_cos_never_exceeds_its_bound() {
         for_random_materials(3, |m, rng| {
-            let kind = m.kind;
+            let kind = &m.kind;
             let mut dir = || warp::uniform_sphere((rng.next_f64(), rng.next_f64()));
             let (wo, wi, n) = (dir(), dir(), dir());
             let e = m.eval(wo, wi, Normals::flat(n));

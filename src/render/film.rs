@@ -166,6 +166,26 @@ impl ErrorEstimate {
     pub fn relative(&self) -> f64 {
         self.rel_mse.sqrt()
     }
+
+    /// Whether there is an estimate: a pixel with one sample (one per half-buffer, where the
+    /// halves are compared) has no spread to estimate its error from, and the whole is infinite.
+    pub fn is_known(&self) -> bool {
+        self.rmse.is_finite() && self.rel_mse.is_finite()
+    }
+}
+
+/// `rmse 0.01205, relative 0.04738`, or why there is no estimate (rather than `inf`).
+impl std::fmt::Display for ErrorEstimate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.is_known() {
+            write!(f, "rmse {:.5}, relative {:.5}", self.rmse, self.relative())
+        } else {
+            f.write_str(
+                "none yet (a pixel's error is estimated from the spread of its samples, and one \
+                 sample has none: render 2 spp or more)",
+            )
+        }
+    }
 }
 
 /// A mutable view of a band of rows, handed to one render task.

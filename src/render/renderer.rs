@@ -22,7 +22,16 @@ pub enum RenderError {
     #[error("invalid settings: {0}")]
     Settings(String),
     #[error("cannot start render threads: {0}")]
-    Pool(#[from] rayon::ThreadPoolBuildError),
+    Pool(rayon::ThreadPoolBuildError),
+}
+
+// Not `#[from]`, which would also make the pool's error this one's `source()`: printed as a
+// chain (`{:#}`), its message would then appear twice. Every error here says all it has to say
+// in its own message.
+impl From<rayon::ThreadPoolBuildError> for RenderError {
+    fn from(e: rayon::ThreadPoolBuildError) -> Self {
+        RenderError::Pool(e)
+    }
 }
 
 /// Counters the summary and the TUI show.

@@ -18,6 +18,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ),
     ("torus-knot", include_str!("../../scenes/torus-knot.toml")),
     ("sky", include_str!("../../scenes/sky.toml")),
+    ("veach", include_str!("../../scenes/veach.toml")),
+    ("materials", include_str!("../../scenes/materials.toml")),
 ];
 
 /// The scene the TUI and `render` open without an argument.

@@ -36,7 +36,8 @@
 //! ```
 
 pub use crate::checked::{
-    Albedo, Dir, Fov, Ior, NonNegative, Positive, Rgb, IOR_RANGE, MAX_MAGNITUDE, MIN_MAGNITUDE, V3,
+    Albedo, Dir, Fov, Ior, NonNegative, Positive, Rgb, Roughness, IOR_RANGE, MAX_MAGNITUDE,
+    MIN_MAGNITUDE, V3,
 };
 use crate::settings::SettingsOverrides;
 use serde::Deserialize;
@@ -55,9 +56,8 @@ pub struct SceneDesc {
     pub environment: Option<Spanned<EnvironmentDesc>>,
     #[serde(default)]
     pub sphere: Vec<SphereDesc>,
-    /// What `ptui check` expects of this scene: read by the check code from the same text;
-    /// a scene only holds it.
-    pub check: Option<toml::Table>,
+    /// What `ptui check` expects of this scene (`scene::check`); a scene only holds it.
+    pub check: Option<super::check::CheckDesc>,
     /// Accelerator: auto (default), flat or bvh (see `accel`).
     pub accel: Option<crate::accel::AccelChoice>,
     #[serde(default)]
@@ -102,10 +102,34 @@ pub enum MaterialName {
     Diffuse,
     Mirror,
     Glass,
+    /// A microfacet metal (`material::conductor`).
+    Conductor,
+    /// A diffuse base under a dielectric coat (`material::plastic`).
+    Plastic,
+}
+
+impl MaterialName {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MaterialName::Diffuse => "diffuse",
+            MaterialName::Mirror => "mirror",
+            MaterialName::Glass => "glass",
+            MaterialName::Conductor => "conductor",
+            MaterialName::Plastic => "plastic",
+        }
+    }
+}
+
+/// `distribution`: the microfacet normal distribution of the rough materials.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DistributionName {
+    Ggx,
+    Beckmann,
 }
 
 /// The material fields every object carries (flattening is not possible with unknown-key
-/// rejection in serde, so each object type lists them).
+/// rejection in serde, so [`object_desc`] adds them to each object type).
 #[derive(Debug, Default, Clone)]
 pub struct MaterialDesc {
     pub material: Option<MaterialName>,
@@ -113,74 +137,107 @@ pub struct MaterialDesc {
     pub emission: Option<Rgb>,
     pub ior: Option<Spanned<Ior>>,
     pub two_sided: Option<Spanned<bool>>,
+    pub alpha: Option<Spanned<Roughness>>,
+    pub alpha_u: Option<Spanned<Roughness>>,
+    pub alpha_v: Option<Spanned<Roughness>>,
+    pub distribution: Option<Spanned<DistributionName>>,
+    pub eta: Option<Spanned<Rgb>>,
+    pub k: Option<Spanned<Rgb>>,
+    pub metal: Option<Spanned<String>>,
+    pub specular: Option<Spanned<Albedo>>,
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SphereDesc {
-    pub name: Option<Spanned<String>>,
-    pub center: V3,
-    pub radius: Positive,
-    pub material: Option<MaterialName>,
-    pub color: Option<Albedo>,
-    pub emission: Option<Rgb>,
-    pub ior: Option<Spanned<Ior>>,
-    /// Emitters only: whether both faces emit (default: the front face alone).
-    pub two_sided: Option<Spanned<bool>>,
+/// Declares an object table: its own fields, then the material keys every object carries
+/// (`material`, `color`, `emission`, `ior`, `two_sided`, `alpha`, `alpha_u`, `alpha_v`,
+/// `distribution`, `eta`, `k`, `metal`, `specular`; see `material`), and `material()`, which
+/// gathers the latter into a [`MaterialDesc`].
+macro_rules! object_desc {
+    ($(#[$meta:meta])* pub struct $name:ident { $($(#[$fmeta:meta])* pub $field:ident: $ty:ty,)* }) => {
+        $(#[$meta])*
+        #[derive(Debug, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct $name {
+            $($(#[$fmeta])* pub $field: $ty,)*
+            pub material: Option<MaterialName>,
+            pub color: Option<Albedo>,
+            pub emission: Option<Rgb>,
+            pub ior: Option<Spanned<Ior>>,
+            /// Emitters only: whether both faces emit (default: the front face alone).
+            pub two_sided: Option<Spanned<bool>>,
+            pub alpha: Option<Spanned<Roughness>>,
+            pub alpha_u: Option<Spanned<Roughness>>,
+            pub alpha_v: Option<Spanned<Roughness>>,
+            pub distribution: Option<Spanned<DistributionName>>,
+            pub eta: Option<Spanned<Rgb>>,
+            pub k: Option<Spanned<Rgb>>,
+            pub metal: Option<Spanned<String>>,
+            pub specular: Option<Spanned<Albedo>>,
+        }
+
+        impl $name {
+            pub fn material(&self) -> MaterialDesc {
+                MaterialDesc {
+                    material: self.material,
+                    color: self.color,
+                    emission: self.emission,
+                    ior: self.ior.clone(),
+                    two_sided: self.two_sided.clone(),
+                    alpha: self.alpha.clone(),
+                    alpha_u: self.alpha_u.clone(),
+                    alpha_v: self.alpha_v.clone(),
+                    distribution: self.distribution.clone(),
+                    eta: self.eta.clone(),
+                    k: self.k.clone(),
+                    metal: self.metal.clone(),
+                    specular: self.specular.clone(),
+                }
+            }
+        }
+    };
 }
 
-/// `[[triangle]]`: one triangle; the front side sees the vertices counter-clockwise.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct TriangleDesc {
-    pub name: Option<Spanned<String>>,
-    pub vertices: Spanned<[V3; 3]>,
-    pub material: Option<MaterialName>,
-    pub color: Option<Albedo>,
-    pub emission: Option<Rgb>,
-    pub ior: Option<Spanned<Ior>>,
-    /// Emitters only: whether both faces emit (default: the front face alone).
-    pub two_sided: Option<Spanned<bool>>,
+object_desc! {
+    pub struct SphereDesc {
+        pub name: Option<Spanned<String>>,
+        pub center: V3,
+        pub radius: Positive,
+    }
 }
 
-/// `[[quad]]`: the parallelogram corner, corner + edge1, corner + edge1 + edge2, corner + edge2
-/// (two triangles; the front side is the one edge1 x edge2 points to).
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct QuadDesc {
-    pub name: Option<Spanned<String>>,
-    pub corner: V3,
-    pub edge1: V3,
-    pub edge2: Spanned<V3>,
-    pub material: Option<MaterialName>,
-    pub color: Option<Albedo>,
-    pub emission: Option<Rgb>,
-    pub ior: Option<Spanned<Ior>>,
-    /// Emitters only: whether both faces emit (default: the front face alone).
-    pub two_sided: Option<Spanned<bool>>,
+object_desc! {
+    /// `[[triangle]]`: one triangle; the front side sees the vertices counter-clockwise.
+    pub struct TriangleDesc {
+        pub name: Option<Spanned<String>>,
+        pub vertices: Spanned<[V3; 3]>,
+    }
 }
 
-/// `[[mesh]]`: triangles from a Wavefront OBJ file (`path`, relative to the scene file) or from
-/// a built-in generator (`torus_knot`), placed by scale, then rotation (degrees about x, then
-/// y, then z), then translation.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MeshDesc {
-    pub name: Option<Spanned<String>>,
-    pub path: Option<Spanned<String>>,
-    pub torus_knot: Option<Spanned<TorusKnotDesc>>,
-    /// Interpolate vertex normals (default: where the file has them; the torus knot's exact
-    /// ones); false shades every triangle flat.
-    pub smooth: Option<bool>,
-    pub translate: Option<V3>,
-    pub scale: Option<Positive>,
-    pub rotate: Option<V3>,
-    pub material: Option<MaterialName>,
-    pub color: Option<Albedo>,
-    pub emission: Option<Rgb>,
-    pub ior: Option<Spanned<Ior>>,
-    /// Emitters only: whether both faces emit (default: the front face alone).
-    pub two_sided: Option<Spanned<bool>>,
+object_desc! {
+    /// `[[quad]]`: the parallelogram corner, corner + edge1, corner + edge1 + edge2, corner +
+    /// edge2 (two triangles; the front side is the one edge1 x edge2 points to).
+    pub struct QuadDesc {
+        pub name: Option<Spanned<String>>,
+        pub corner: V3,
+        pub edge1: V3,
+        pub edge2: Spanned<V3>,
+    }
+}
+
+object_desc! {
+    /// `[[mesh]]`: triangles from a Wavefront OBJ file (`path`, relative to the scene file) or
+    /// from a built-in generator (`torus_knot`), placed by scale, then rotation (degrees about
+    /// x, then y, then z), then translation.
+    pub struct MeshDesc {
+        pub name: Option<Spanned<String>>,
+        pub path: Option<Spanned<String>>,
+        pub torus_knot: Option<Spanned<TorusKnotDesc>>,
+        /// Interpolate vertex normals (default: where the file has them; the torus knot's exact
+        /// ones); false shades every triangle flat.
+        pub smooth: Option<bool>,
+        pub translate: Option<V3>,
+        pub scale: Option<Positive>,
+        pub rotate: Option<V3>,
+    }
 }
 
 #[derive(Debug, Clone, Copy, Deserialize)]
@@ -192,20 +249,3 @@ pub struct TorusKnotDesc {
     pub sides: u32,
     pub tube: Positive,
 }
-
-macro_rules! material_of {
-    ($($t:ty),*) => {$(
-        impl $t {
-            pub fn material(&self) -> MaterialDesc {
-                MaterialDesc {
-                    material: self.material,
-                    color: self.color,
-                    emission: self.emission,
-                    ior: self.ior.clone(),
-                    two_sided: self.two_sided.clone(),
-                }
-            }
-        }
-    )*};
-}
-material_of!(SphereDesc, TriangleDesc, QuadDesc, MeshDesc);

@@ -264,7 +264,13 @@ impl SceneDoc {
         let target = self.target();
         let keys = self.changed_keys();
         let text = self.text();
-        if let Ok(previous) = std::fs::read(&target) {
+        // A regular file only: a FIFO would hang the read (and the rename replaces it anyway).
+        let previous = target
+            .metadata()
+            .is_ok_and(|m| m.is_file())
+            .then(|| std::fs::read(&target).ok())
+            .flatten();
+        if let Some(previous) = previous {
             let mut backup = target.clone().into_os_string();
             backup.push("~");
             write(Path::new(&backup), &previous)?;

@@ -1,7 +1,5 @@
 //! Scene errors name the file, the line and column, the field, and the problem.
 
-use std::path::PathBuf;
-
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// A value the scene file got wrong.
@@ -13,11 +11,9 @@ pub enum SceneError {
         field: Option<String>,
         message: String,
     },
-    #[error("{}: cannot read scene file: {source}", .path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    /// The file itself cannot be read (missing, a directory or a device, too large, not text).
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
     #[error("no scene file `{spec}` and no built-in scene of that name (built-ins: {builtins})")]
     NotFound { spec: String, builtins: String },
 }

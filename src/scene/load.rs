@@ -2,7 +2,8 @@
 //! (cross-field constraints, duplicate names), and choose the machinery this scene needs.
 
 use super::camera::{build_camera, focus_camera};
-use super::description::{MaterialDesc, MaterialName, MeshDesc, SceneDesc};
+use super::description::{MaterialDesc, MeshDesc, SceneDesc};
+use super::materials::build_material;
 use super::mesh::{self, Transform};
 use super::mesh_triangle_room;
 use super::reload::choose_accel;
@@ -12,8 +13,9 @@ use crate::accel::AccelChoice;
 use crate::geometry::torus_knot::TorusKnot;
 use crate::geometry::{Primitive, Shape};
 use crate::geometry::{Sphere, Triangle};
+use crate::input::{self, Source};
 use crate::light::{sphere::SphereLight, triangle::TriangleLight, Light, Lights};
-use crate::material::{Material, MaterialKind};
+use crate::material::Material;
 use crate::math::DVec3;
 use crate::progress::Progress;
 use std::collections::HashSet;
@@ -23,10 +25,6 @@ use std::sync::Arc;
 use std::time::Instant;
 use toml::Spanned;
 
-/// Default reflectance of an object that states none (and is not a light).
-const DEFAULT_COLOR: f64 = 0.75;
-/// Default index of refraction of glass.
-const DEFAULT_IOR: f64 = 1.5;
 /// Scene-build choices made outside the scene file.
 #[derive(Clone, Debug, Default)]
 pub struct BuildOptions {
@@ -39,41 +37,75 @@ pub struct BuildOptions {
     pub progress: Option<Arc<Progress>>,
 }
 
-/// Load a scene from a file path or a built-in name (a file of that name wins).
+/// Load a scene from a file path, `-` (standard input) or a built-in name (a file of that name
+/// wins).
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
     load_with(spec, &BuildOptions::default())
 }
 
-/// [`load`] with build options; a scene file's folder becomes the base of its mesh paths.
+/// [`load`] with build options; a scene file's folder becomes the base of its mesh paths (for a
+/// pipe or standard input, the current directory).
 pub fn load_with(spec: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
-    let (src, _) = read_source(spec)?;
-    load_text(spec, &src, options)
+    match scene_text(spec)? {
+        SceneText::Read { text, base_dir } => {
+            let options = BuildOptions {
+                base_dir: base_dir.or_else(|| options.base_dir.clone()),
+                ..options.clone()
+            };
+            // Errors name the file as given, standard input as such.
+            load_str_with(&text, &Source::from_arg(spec).name(), &options)
+        }
+        SceneText::Builtin(src) => load_str_with(src, spec, options),
+    }
 }
 
-/// The text of the scene `spec` names: the file of that path, else the built-in scene of that
-/// name (a file wins), and the file's path (None for a built-in).
-pub fn read_source(spec: &str) -> Result<(String, Option<PathBuf>), SceneError> {
-    let path = Path::new(spec);
-    if path.is_file() {
-        let src = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        return Ok((src, Some(path.to_path_buf())));
-    }
-    if path.exists() {
-        return Err(SceneError::Io {
-            path: path.to_path_buf(),
-            source: std::io::Error::other("is a directory, not a scene file"),
-        });
+/// A scene's text: read from a file or a pipe (with the folder its relative paths start from),
+/// or built in.
+pub enum SceneText {
+    Read {
+        text: String,
+        /// The scene file's folder; `None` for a pipe or standard input.
+        base_dir: Option<PathBuf>,
+    },
+    Builtin(&'static str),
+}
+
+/// The text `spec` names: `-` is standard input, an existing path is read (through
+/// [`crate::input`]: a file or a pipe, nothing else), anything else a built-in name.
+pub fn scene_text(spec: &str) -> Result<SceneText, SceneError> {
+    let source = Source::from_arg(spec);
+    let exists = match &source {
+        Source::Path(path) => std::fs::symlink_metadata(path).is_ok(),
+        Source::Stdin => true,
+    };
+    if exists {
+        let text = input::read_text(&source, "scene file")?;
+        let base_dir = match &source {
+            Source::Path(path) if path.is_file() => {
+                Some(path.parent().map_or_else(PathBuf::new, Path::to_path_buf))
+            }
+            _ => None,
+        };
+        return Ok(SceneText::Read { text, base_dir });
     }
     match builtin::get(spec) {
-        Some(src) => Ok((src.to_string(), None)),
+        Some(src) => Ok(SceneText::Builtin(src)),
         None => Err(SceneError::NotFound {
             spec: spec.to_string(),
             builtins: builtin::names().join(", "),
         }),
     }
+}
+
+/// The text of the scene `spec` names, read as [`scene_text`] reads it, and the file's path
+/// (None for a built-in scene or standard input).
+pub fn read_source(spec: &str) -> Result<(String, Option<PathBuf>), SceneError> {
+    Ok(match scene_text(spec)? {
+        SceneText::Read { text, base_dir } => {
+            (text, base_dir.is_some().then(|| PathBuf::from(spec)))
+        }
+        SceneText::Builtin(src) => (src.to_string(), None),
+    })
 }
 
 /// Build the scene `spec` names from `src`, its text (as read, or as edited in the TUI): paths
@@ -185,7 +217,7 @@ impl Builder<'_> {
 
     /// Add shapes sharing material `material`; emissive ones become lights.
     fn add(&mut self, shapes: impl IntoIterator<Item = Shape>, material: u32) {
-        let m = self.materials[material as usize];
+        let m = &self.materials[material as usize];
         for shape in shapes {
             let prim = self.prims.len() as u32;
             let light = if m.is_emissive() {
@@ -335,6 +367,7 @@ fn build(
         );
     }
     let report = BuildReport {
+        materials: super::materials::describe(&materials),
         accel: accel_text,
         light_sampling,
         environment: sky.text,
@@ -500,68 +533,6 @@ fn sidedness(lights: &Lights) -> String {
         ));
     }
     parts.join(", ")
-}
-
-pub(super) fn build_material(
-    m: &MaterialDesc,
-    src: &str,
-    file: &str,
-    object: &str,
-    flat: bool,
-) -> Result<Material, SceneError> {
-    let kind_name = m.material.unwrap_or_default();
-    let emission = m.emission.map_or(DVec3::ZERO, |e| DVec3::from_array(e.0));
-    // Emitters do not reflect unless the scene gives them a colour.
-    let default_color = if emission.max_element() > 0.0 {
-        0.0
-    } else {
-        DEFAULT_COLOR
-    };
-    let color = m
-        .color
-        .map_or(DVec3::splat(default_color), |c| DVec3::from_array(c.0));
-    let kind = match kind_name {
-        MaterialName::Diffuse => MaterialKind::Diffuse,
-        MaterialName::Mirror => MaterialKind::Mirror,
-        MaterialName::Glass => MaterialKind::Glass {
-            ior: m.ior.as_ref().map_or(DEFAULT_IOR, |i| i.get_ref().0),
-        },
-    };
-    if let Some(two_sided) = &m.two_sided {
-        let problem = if !flat {
-            Some("`two_sided` applies to triangles, quads and meshes: a sphere emits outwards")
-        } else if emission.max_element() <= 0.0 {
-            Some("`two_sided` only applies to emitters (objects with an `emission`)")
-        } else {
-            None
-        };
-        if let Some(problem) = problem {
-            return Err(SceneError::at(
-                file,
-                src,
-                Some(two_sided.span()),
-                Some(format!("{object}.two_sided")),
-                problem,
-            ));
-        }
-    }
-    // Flat emitters emit from their front face alone unless asked, as in pbrt and Mitsuba.
-    let one_sided = flat && !m.two_sided.as_ref().is_some_and(|t| *t.get_ref());
-    if let (Some(ior), false) = (&m.ior, kind_name == MaterialName::Glass) {
-        return Err(SceneError::at(
-            file,
-            src,
-            Some(ior.span()),
-            Some(format!("{object}.ior")),
-            "`ior` only applies to material = \"glass\"",
-        ));
-    }
-    Ok(Material {
-        kind,
-        color,
-        emission,
-        one_sided,
-    })
 }
 
 /// A `[render]` size whose film cannot fit in the available memory is an error of the scene file,

@@ -3,10 +3,12 @@
 
 pub mod builtin;
 mod camera;
+pub mod check;
 pub mod description;
 pub mod edit;
 pub mod error;
 pub mod load;
+pub mod materials;
 pub mod mesh;
 pub mod obj;
 pub mod reload;
@@ -43,13 +45,13 @@ pub const BUILD_BYTES_PER_TRIANGLE: u64 = 512;
 /// The text says which bound it is, with the numbers, for the error.
 pub fn mesh_triangle_room(so_far: u64) -> (u64, String) {
     let by_index = MAX_MESH_TRIANGLES.saturating_sub(so_far);
-    match crate::settings::available_memory() {
+    match crate::memory::available() {
         Some(avail) if avail / BUILD_BYTES_PER_TRIANGLE < MAX_MESH_TRIANGLES => (
             (avail / BUILD_BYTES_PER_TRIANGLE).saturating_sub(so_far),
             format!(
                 "at about {BUILD_BYTES_PER_TRIANGLE} bytes a triangle for the triangles and their \
                  BVH, the {} of memory available hold {} mesh triangles per scene",
-                crate::settings::human_bytes(avail),
+                crate::memory::human_bytes(avail),
                 avail / BUILD_BYTES_PER_TRIANGLE
             ),
         ),
@@ -63,6 +65,8 @@ pub fn mesh_triangle_room(so_far: u64) -> (u64, String) {
 /// What the scene build chose, reported to the user.
 #[derive(Clone, Debug)]
 pub struct BuildReport {
+    /// The materials the objects use (`scene::materials::describe`).
+    pub materials: String,
     pub accel: String,
     pub light_sampling: String,
     /// What lights the scene from infinity, and how it is sampled.
@@ -76,8 +80,8 @@ impl std::fmt::Display for BuildReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "accel: {}; light sampling: {}; environment: {}",
-            self.accel, self.light_sampling, self.environment
+            "accel: {}; light sampling: {}; environment: {}; materials: {}",
+            self.accel, self.light_sampling, self.environment, self.materials
         )?;
         for w in &self.warnings {
             write!(f, "; warning: {w}")?;

@@ -10,6 +10,7 @@
 //! number is an error `file:line: reason`. Nothing here panics on any input.
 
 use crate::checked::MAX_MAGNITUDE;
+use crate::input::{self, Content, Source};
 use crate::progress::{tick, Progress};
 use std::path::Path;
 
@@ -45,11 +46,9 @@ struct Face {
 /// `path:line: reason` (or `path: reason` for the file as a whole).
 pub fn read(path: &Path, limit: u64, progress: Option<&Progress>) -> Result<ObjData, String> {
     let shown = path.display();
-    // Read it ourselves: io errors (missing, a directory, no permission) say what went wrong.
-    let bytes = std::fs::read(path).map_err(|e| match e.kind() {
-        std::io::ErrorKind::IsADirectory => format!("{shown}: is a directory, not an OBJ file"),
-        _ => format!("{shown}: cannot read OBJ file: {e}"),
-    })?;
+    // A file or a pipe only, within the memory and with text-sized lines (`crate::input`).
+    let source = Source::Path(path.to_path_buf());
+    let bytes = input::read(&source, "OBJ file", Content::Text).map_err(|e| e.to_string())?;
     if let Some(p) = progress {
         p.start(format!("reading {shown}"), bytes.len() as u64);
     }

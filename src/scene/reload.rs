@@ -4,7 +4,8 @@
 
 use super::camera::{build_camera, focus_camera};
 use super::description::SceneDesc;
-use super::load::{base_dir, build_material, check_render_size, load_text, parse, BuildOptions};
+use super::load::{base_dir, check_render_size, load_text, parse, BuildOptions};
+use super::materials::build_material;
 use super::sky::BUILTIN_SKY;
 use super::{Scene, SceneError};
 use crate::accel::flat::FlatScan;

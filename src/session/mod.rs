@@ -135,6 +135,8 @@ pub struct BuildNotes {
     pub caustics: String,
     /// What lights the scene from infinity (`BuildReport::environment`).
     pub environment: String,
+    /// The materials the objects use (`BuildReport::materials`).
+    pub materials: String,
     pub build_time: std::time::Duration,
 }
 
@@ -448,6 +450,7 @@ impl Worker {
                 light_sampling: scene.report.light_sampling.clone(),
                 caustics: job.renderer.caustics_note().to_string(),
                 environment: scene.report.environment.clone(),
+                materials: scene.report.materials.clone(),
                 build_time: scene.report.build_time,
             },
             threads: job.renderer.threads(),

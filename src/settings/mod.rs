@@ -74,6 +74,32 @@ impl Caustics {
     }
 }
 
+/// Which sampling strategies the `path` integrator combines for direct light at a non-delta
+/// vertex: the comparison of Veach's thesis (fig. 9.2). Only `mis` is the renderer's; the other
+/// two exist to show why (`ptui converge veach --strategy light,bsdf,mis`). All three are
+/// unbiased; each weighs a light found both ways so that it counts once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Strategy {
+    /// Light sampling and BSDF sampling combined by the power heuristic.
+    #[default]
+    Mis,
+    /// Light sampling alone: emission BSDF sampling finds on a light counts zero.
+    Light,
+    /// BSDF sampling alone: no shadow rays towards lights.
+    Bsdf,
+}
+
+impl Strategy {
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Mis => "mis",
+            Strategy::Light => "light",
+            Strategy::Bsdf => "bsdf",
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Tonemap {
@@ -108,6 +134,8 @@ pub struct RenderSettings {
     pub sampler: SamplerKind,
     /// Caustics by light tracing or by the camera paths (`path` integrator only).
     pub caustics: Caustics,
+    /// Light sampling, BSDF sampling or both by MIS (`path` integrator only).
+    pub strategy: Strategy,
     /// Longest path in bounces; `None` leaves it to Russian roulette.
     pub max_depth: Option<u32>,
     pub exposure: f64,
@@ -138,6 +166,7 @@ impl Default for RenderSettings {
             integrator: IntegratorKind::Path,
             sampler: SamplerKind::Sobol,
             caustics: Caustics::Light,
+            strategy: Strategy::Mis,
             max_depth: None,
             exposure: 1.0,
             tonemap: Tonemap::Clamp,
@@ -170,6 +199,7 @@ pub struct SettingsOverrides {
     pub integrator: Option<IntegratorKind>,
     pub sampler: Option<SamplerKind>,
     pub caustics: Option<Caustics>,
+    pub strategy: Option<Strategy>,
     pub max_depth: Option<u32>,
     #[serde(default, deserialize_with = "crate::checked::de_positive_opt")]
     pub exposure: Option<f64>,
@@ -197,8 +227,8 @@ impl RenderSettings {
             ($($f:ident),*) => { $( if let Some(v) = o.$f { self.$f = v; } )* };
         }
         take!(
-            width, height, spp, seed, integrator, sampler, caustics, exposure, tonemap, threads,
-            adaptive
+            width, height, spp, seed, integrator, sampler, caustics, strategy, exposure, tonemap,
+            threads, adaptive
         );
         if let Some(d) = o.max_depth {
             self.max_depth = Some(d);
@@ -285,14 +315,14 @@ impl RenderSettings {
             }
         }
         let need = self.width as u64 * self.height as u64 * BYTES_PER_PIXEL;
-        if let Some(avail) = available_memory() {
+        if let Some(avail) = crate::memory::available() {
             if need > avail {
                 return Err(format!(
                     "a {}x{} film needs {} of memory but only {} is available",
                     self.width,
                     self.height,
-                    human_bytes(need),
-                    human_bytes(avail)
+                    crate::memory::human_bytes(need),
+                    crate::memory::human_bytes(avail)
                 ));
             }
         }
@@ -301,29 +331,6 @@ impl RenderSettings {
 
     pub fn pixels(&self) -> usize {
         self.width as usize * self.height as usize
-    }
-}
-
-/// MemAvailable from /proc/meminfo, where there is one.
-pub fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
-pub fn human_bytes(b: u64) -> String {
-    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
-    let mut v = b as f64;
-    let mut unit = 0;
-    while v >= 1024.0 && unit + 1 < UNITS.len() {
-        v /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{b} B")
-    } else {
-        format!("{v:.1} {}", UNITS[unit])
     }
 }
 

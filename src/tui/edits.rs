@@ -16,6 +16,15 @@ use crate::scene::SceneError;
 use crossterm::event::{KeyCode, KeyEvent, MouseButton, MouseEvent, MouseEventKind};
 use std::path::PathBuf;
 
+/// The scene file's text, read as the loader reads it (a file or a pipe, within the size limit).
+fn read_scene(path: &std::path::Path) -> Result<String, String> {
+    crate::input::read_text(
+        &crate::input::Source::Path(path.to_path_buf()),
+        "scene file",
+    )
+    .map_err(|e| e.to_string())
+}
+
 /// An edit's error as the form shows it: the loader's field and message (the line and column
 /// would be those of the text in memory).
 fn edit_error(e: &SceneError) -> String {
@@ -217,7 +226,7 @@ impl App {
             return None;
         };
         if let Some(path) = &doc.path {
-            match std::fs::read_to_string(path) {
+            match read_scene(path) {
                 Ok(now) if now != doc.disk_text() => {
                     self.message = Some(Message::Error(format!(
                         "{} changed on disk since ptui read it: not written",
@@ -277,12 +286,14 @@ impl App {
         let scene_file = doc.path.clone();
         let mut what = Vec::new();
         if let Some(path) = scene_file.as_ref().filter(|p| changed.contains(p)) {
-            let text = match std::fs::read_to_string(path) {
+            // Mid-save (an editor renaming a new file over it): the next change brings it.
+            if !path.exists() {
+                return None;
+            }
+            let text = match read_scene(path) {
                 Ok(t) => t,
-                // Mid-save (an editor renaming a new file over it): the next change brings it.
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => return None,
                 Err(e) => {
-                    self.message = Some(Message::Error(format!("{}: {e}", path.display())));
+                    self.message = Some(Message::Error(e));
                     return None;
                 }
             };

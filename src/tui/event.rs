@@ -2,7 +2,7 @@
 //! resizes), a tick, termination signals; the render worker and save threads send on it too.
 
 use crate::session::SessionEvent;
-use crossterm::event::{self as ct, KeyEvent, KeyEventKind, MouseEvent};
+use crossterm::event::{self as ct, KeyCode, KeyEvent, KeyEventKind, KeyModifiers, MouseEvent};
 use std::path::PathBuf;
 use std::sync::mpsc::Sender;
 use std::time::{Duration, Instant};
@@ -80,4 +80,69 @@ pub fn spawn_signals(tx: Sender<Event>) -> std::io::Result<()> {
             }
         })?;
     Ok(())
+}
+
+/// Key presses in raw terminal input read before the input thread started (the graphics probe
+/// reads stdin for the terminal's replies, and takes whatever the user typed meanwhile): plain
+/// characters, Enter, Tab, Backspace, Esc, Ctrl-C, arrows and Shift-Tab. Anything else is
+/// dropped; it is what a key pressed in the first fraction of a second can be.
+pub fn keys_from_bytes(bytes: &[u8]) -> Vec<KeyEvent> {
+    let key = |code| KeyEvent::new(code, KeyModifiers::NONE);
+    let mut keys = Vec::new();
+    let text = String::from_utf8_lossy(bytes);
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        let k = match c {
+            '\x03' => KeyEvent::new(KeyCode::Char('c'), KeyModifiers::CONTROL),
+            '\r' | '\n' => key(KeyCode::Enter),
+            '\t' => key(KeyCode::Tab),
+            '\x7f' | '\x08' => key(KeyCode::Backspace),
+            '\x1b' if matches!(chars.peek(), Some('[' | 'O')) => {
+                chars.next();
+                let code = match chars.next() {
+                    Some('A') => KeyCode::Up,
+                    Some('B') => KeyCode::Down,
+                    Some('C') => KeyCode::Right,
+                    Some('D') => KeyCode::Left,
+                    Some('Z') => KeyCode::BackTab,
+                    _ => continue,
+                };
+                key(code)
+            }
+            '\x1b' => key(KeyCode::Esc),
+            c if !c.is_control() => key(KeyCode::Char(c)),
+            _ => continue,
+        };
+        keys.push(k);
+    }
+    keys
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn typed_bytes_become_the_keys_they_were() {
+        let codes: Vec<KeyCode> = keys_from_bytes(b"q\x1b[A\x1b[Z\x1b\r\t\x7f\xc3\xa9")
+            .iter()
+            .map(|k| k.code)
+            .collect();
+        assert_eq!(
+            codes,
+            [
+                KeyCode::Char('q'),
+                KeyCode::Up,
+                KeyCode::BackTab,
+                KeyCode::Esc,
+                KeyCode::Enter,
+                KeyCode::Tab,
+                KeyCode::Backspace,
+                KeyCode::Char('\u{e9}'),
+            ]
+        );
+        let ctrl_c = keys_from_bytes(b"\x03");
+        assert_eq!(ctrl_c[0].code, KeyCode::Char('c'));
+        assert!(ctrl_c[0].modifiers.contains(KeyModifiers::CONTROL));
+    }
 }

@@ -108,6 +108,16 @@ impl Field {
         }
     }
 
+    /// The fields that cycle, as the help and the docs list them: `integrator, hemisphere, ...`.
+    pub fn cycling() -> String {
+        let names: Vec<&str> = Field::ALL
+            .iter()
+            .filter(|f| f.cycles())
+            .map(|f| f.name())
+            .collect();
+        names.join(", ")
+    }
+
     /// Fields with a small set of values cycle on Enter instead of opening a text edit.
     pub fn cycles(self) -> bool {
         matches!(

@@ -1,6 +1,8 @@
 //! The key list (`?`): every key, grouped by the mode it applies in, in two columns where the
 //! terminal is wide enough.
 
+use super::form::Field;
+use super::text::wrap_words;
 use ratatui::layout::Rect;
 use ratatui::style::{Modifier, Style};
 use ratatui::text::{Line, Span};
@@ -87,6 +89,19 @@ pub fn draw_help(frame: &mut Frame, area: Rect) {
                 gap.into_iter().chain(s.iter().cloned())
             })
             .collect();
+        // The fields Enter steps, as the code has them (so the list cannot drift from it).
+        let mut rest = rest;
+        rest.push(Line::from(""));
+        rest.push(Line::from(Span::styled(
+            " Enter steps",
+            Style::new().bold().underlined(),
+        )));
+        let steps = format!("{}, an object's material and yes/no keys", Field::cycling());
+        rest.extend(
+            wrap_words(&steps, 37)
+                .into_iter()
+                .map(|l| Line::from(format!(" {l}"))),
+        );
         if area.width >= 80 {
             vec![first.clone(), rest]
         } else {

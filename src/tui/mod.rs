@@ -101,9 +101,12 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
 
     let mut guard = term::TermGuard::enter().context("cannot set up the terminal")?;
     // Ask the terminal before the input thread reads stdin, so no reply is taken for a key.
-    let support = match opts.graphics {
-        GraphicsChoice::Auto => graphics::detect::query(graphics::QUERY_TIMEOUT).ok(),
-        _ => None,
+    let (support, typed) = match opts.graphics {
+        GraphicsChoice::Auto => match graphics::detect::query(graphics::QUERY_TIMEOUT) {
+            Ok((support, typed)) => (Some(support), typed),
+            Err(_) => (None, Vec::new()),
+        },
+        _ => (None, Vec::new()),
     };
     if let Some(protocol) = graphics::choose(opts.graphics, support.as_ref()) {
         let cell = graphics::detect::cell_size()
@@ -112,6 +115,10 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
         app.graphics = Some(graphics::Picture::new(protocol, cell));
         // Pixels need no colour hint.
         app.color_hint = false;
+    }
+    // Keys typed while the terminal was asked come first, as if the input thread had read them.
+    for key in event::keys_from_bytes(&typed) {
+        let _ = tx.send(Event::Key(key, Instant::now()));
     }
     event::spawn_input(tx.clone())?;
     event::spawn_tick(tx.clone(), Duration::from_millis(250))?;

@@ -283,7 +283,7 @@ fn draw_status(frame: &mut Frame, app: &App, area: Rect) {
         Layout::vertical([Constraint::Length(1), Constraint::Length(1)]).areas(area);
     let width = area.width as usize;
     if let Some(snap) = &app.snapshot {
-        let err = if snap.error.rmse.is_finite() {
+        let err = if snap.error.is_known() {
             format!(
                 " · est. error {:.4} (rel {:.3})",
                 snap.error.rmse,
@@ -535,6 +535,9 @@ fn draw_details(frame: &mut Frame, app: &App, area: Rect) {
     if !app.notes.environment.is_empty() && app.notes.environment != "black" {
         rows.push(("sky", app.notes.environment.clone()));
     }
+    if !app.notes.materials.is_empty() {
+        rows.push(("materials", app.notes.materials.clone()));
+    }
     let colours = match (app.color_mode, app.form.color) {
         (super::color::ColorMode::Truecolor, _) => "truecolor".to_string(),
         (_, super::color::ColorChoice::Auto) => COLOR_HINTS[0].to_string(),
@@ -605,6 +608,7 @@ mod tests {
                        of a pilot's paths reached the camera)"
                 .into(),
             environment: "black".into(),
+            materials: "diffuse x6, mirror, glass, emitter".into(),
             build_time: Duration::from_micros(400),
         }
     }
@@ -837,6 +841,7 @@ mod tests {
             caustics: String::new(),
             environment: "map builtin:sky (512x256), importance-sampled, MIS with BSDF sampling"
                 .into(),
+            materials: String::new(),
             build_time: Duration::ZERO,
         };
         assert_eq!(bvh.short(), "BVH, 1200 objects · none · sky map");

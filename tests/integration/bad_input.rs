@@ -196,7 +196,10 @@ fn missing_paths_and_directories_are_errors() {
         .err()
         .unwrap()
         .to_string();
-    assert!(err.contains("is a directory"), "{err}");
+    assert!(
+        err.ends_with("cannot read scene file: a directory, not a file"),
+        "{err}"
+    );
 }
 
 /// Values at the edge of every range are accepted and render finite images.

@@ -343,7 +343,7 @@ fn bad_maps_get_clear_errors() {
     expect_error(
         &scene(&missing),
         "environment.map",
-        "cannot open the environment map",
+        "cannot read environment map: no such file or directory",
     );
 
     let text = dir.path().join("text.exr");

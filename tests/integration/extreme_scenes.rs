@@ -36,8 +36,8 @@ fn check(name: &str) -> Outcome {
 }
 
 macro_rules! extreme_tests {
-    ($($test:ident => $name:literal,)*) => {
-        $( #[test] fn $test() { check($name); } )*
+    ($($(#[$attr:meta])* $test:ident => $name:literal,)*) => {
+        $( $(#[$attr])* #[test] fn $test() { check($name); } )*
 
         /// Every embedded extreme scene has a test above.
         #[test]
@@ -58,6 +58,9 @@ extreme_tests! {
     scale_1e3 => "scale-1e3",
     walls_1e6 => "walls-1e6",
     walls_1e8 => "walls-1e8",
+    // 8192 spp at 48x36 (its light behind the invisible glass is found by BSDF sampling alone;
+    // docs/TESTING.md): about 12 s, so in the deep tier.
+    #[ignore = "deep tier: cargo test --release -- --ignored"]
     index_matched_glass_is_invisible => "index-matched",
     small_light_1e_minus_2 => "small-light-1e-2",
     small_light_1e_minus_4_matches_1e_minus_2 => "small-light-1e-4",

@@ -2,7 +2,9 @@
 //! mutations of a valid mesh (numbers replaced by NaN, infinities, huge or out-of-range indices,
 //! lines deleted, duplicated or cut, garbage inserted). The loader must never panic: it returns
 //! triangles with finite vertices or an error with a message, and whatever loads must render a
-//! tiny image without NaN or infinite samples.
+//! tiny image without NaN or infinite samples. Every case runs with a time limit
+//! (`common::within`), so a hang fails the test instead of stalling it; the devices and special
+//! files a path may name are fed to the readers by `special_files.rs`.
 
 use proptest::prelude::*;
 use ptui::render::Renderer;
@@ -164,8 +166,16 @@ fn temp_obj(text: &str, case: u64) -> tempfile::NamedTempFile {
     file
 }
 
-/// Load `text` as an OBJ file and, if it loads, render it inside a lit scene.
+/// [`check_now`] within the fuzzers' time limit.
 fn check(text: &str, case: u64) -> Result<(), TestCaseError> {
+    let owned = text.to_string();
+    crate::common::within(crate::common::CASE_LIMIT, text, move || {
+        check_now(&owned, case)
+    })
+}
+
+/// Load `text` as an OBJ file and, if it loads, render it inside a lit scene.
+fn check_now(text: &str, case: u64) -> Result<(), TestCaseError> {
     let file = temp_obj(text, case);
     let path = file.path();
     let loaded = mesh::load_obj(path, 10_000, None);

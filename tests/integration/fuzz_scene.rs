@@ -2,7 +2,8 @@
 //! extreme scenes (numbers replaced by NaN, infinities, huge, tiny or negative values, strings,
 //! arrays; lines duplicated, deleted, cut short; random characters inserted). The loader must
 //! never panic: it returns a scene or an error with a message. Whatever loads must render a tiny
-//! image without panicking and without NaN or infinite samples.
+//! image without panicking and without NaN or infinite samples. Every case runs with a time limit
+//! (`common::within`), so a hang fails the test instead of stalling it.
 
 use proptest::prelude::*;
 use ptui::render::Renderer;
@@ -129,8 +130,16 @@ fn apply(src: &str, m: &Mutation) -> String {
     }
 }
 
-/// Load; if it loads, render 4x3 with one sample per pixel on one thread.
+/// [`load_and_render_now`] within the fuzzers' time limit.
 fn load_and_render(text: &str) -> Result<(), TestCaseError> {
+    let owned = text.to_string();
+    crate::common::within(crate::common::CASE_LIMIT, text, move || {
+        load_and_render_now(&owned)
+    })
+}
+
+/// Load; if it loads, render 4x3 with one sample per pixel on one thread.
+fn load_and_render_now(text: &str) -> Result<(), TestCaseError> {
     match load_str(text, "fuzz.toml") {
         Err(e) => {
             let msg = e.to_string();

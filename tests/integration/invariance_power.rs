@@ -44,8 +44,10 @@ fn a_mirror_made_diffuse_is_rejected() {
 
 /// The index-matched sphere given an index of 1.5 refracts the room behind it: many pixels change
 /// moderately, none enough alone (max|z| 4.8 against 5.0, measured), so the chi-square test is
-/// the one that rejects it (3.9 against 3.06, measured).
+/// the one that rejects it (3.9 against 3.06, measured). Deep tier: the scene's 8192 spp take
+/// about 12 s.
 #[test]
+#[ignore = "deep tier: cargo test --release -- --ignored"]
 fn index_matched_glass_made_visible_is_rejected() {
     let o = check_variant("index-matched", |t| only(t, "ior = 1.0", "ior = 1.5"));
     eprintln!("{:?}", o.verdicts);

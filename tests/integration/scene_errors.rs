@@ -44,6 +44,22 @@ fn unknown_key() {
     assert_mentions(&e, &["bad.toml:14:", "radiuss", "unknown field"]);
 }
 
+/// Keys written after `[check]` belong to it in TOML: `accel` there used to vanish without a
+/// word (the scene rendered with the BVH all the same). The table is typed like every other.
+#[test]
+fn keys_after_check_are_unknown_fields_of_check() {
+    let e = error_for(
+        "[render]",
+        "[check]\nsame_as = \"cornell\"\naccel = \"flat\"\n\n[render]",
+    );
+    assert_mentions(&e, &["bad.toml:8:", "field `check.accel`", "unknown field"]);
+    let e = error_for("[render]", "[check]\nspp = 1\n\n[render]");
+    assert_mentions(&e, &["bad.toml:7:", "check.spp", "at least 2 samples"]);
+    // A valid table loads.
+    let src = GOOD.replacen("[render]", "[check]\nmean = 0.5\nspp = 16\n\n[render]", 1);
+    scene::load_str(&src, "good.toml").unwrap();
+}
+
 #[test]
 fn unknown_table() {
     let e = error_for("[render]", "[renderr]");

@@ -34,11 +34,7 @@ pub struct Args {
     #[arg(long, default_value_t = 10.0, value_parser = parse_positive)]
     pub seconds: f64,
     /// Linear reference image of cornell (320x240 EXR).
-    #[arg(
-        long,
-        value_name = "REF.exr",
-        default_value = "../shared/refs/cornell.exr"
-    )]
+    #[arg(long, value_name = "REF.exr", default_value = "tests/refs/cornell.exr")]
     pub reference: PathBuf,
     /// Also run this build of `benches/smallpt/smallpt.cpp` (before and after ptui's series)
     /// and print ptui's figures as ratios to it, measured in the same run.

@@ -2,7 +2,7 @@
 //! error carried by the worst pixels, and writes a heat map of the per-pixel squared error.
 //!
 //! ```sh
-//! cargo xtask error-breakdown render.exr ../shared/refs/cornell.exr heat.png
+//! cargo xtask error-breakdown render.exr tests/refs/cornell.exr heat.png
 //! ```
 
 use ptui::analysis::reference;

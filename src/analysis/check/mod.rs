@@ -2,16 +2,8 @@
 //! states. The extreme scenes of `scenes/extreme/` (embedded, see [`extreme`]) are the default set;
 //! the tests in `tests/extreme_scenes.rs` run the same checks.
 //!
-//! ```toml
-//! [check]
-//! about = "cornell moved by (1e6, 1e6, 1e6)"   # one line for the table
-//! width = 48                # render size and samples for the check (default 32 x 24, 64 spp)
-//! height = 36
-//! spp = 256
-//! same_as = "cornell"       # renders the same image as this scene (per-pixel z-test)
-//! mean = 100                # image mean radiance, a number or [r, g, b] (z-test)
-//! range = [0.5, 1.0]        # every pixel's mean within [lo, hi], up to its noise
-//! ```
+//! The table's keys (`about`, `width`, `height`, `spp`, `same_as`, `mean`, `range`) are
+//! [`crate::scene::check`]'s: the scene format reads them, unknown keys refused.
 //!
 //! Every check also requires zero invalid (NaN or infinite) samples. `same_as` names a built-in
 //! scene, an extreme scene, or a file relative to the checked scene's directory; the reference is
@@ -20,13 +12,12 @@
 pub mod extreme;
 
 use crate::analysis::stats;
-use crate::checked::{de_count, de_dimension, Rgb};
+use crate::input;
 use crate::render::film::Film;
 use crate::render::{build_pool, RenderError, Renderer};
 use crate::sampling::SamplerKind;
 use crate::scene::{self, builtin, SceneError};
 use crate::settings::{RenderSettings, SettingsOverrides};
-use serde::de::{self, Deserializer};
 use serde::Deserialize;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -38,54 +29,13 @@ use std::time::{Duration, Instant};
 pub const DEFAULT_SIZE: (u32, u32) = (32, 24);
 pub const DEFAULT_SPP: u32 = 64;
 
-/// A scene's `[check]` table.
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CheckDesc {
-    pub about: Option<String>,
-    #[serde(default, deserialize_with = "de_dimension")]
-    pub width: Option<u32>,
-    #[serde(default, deserialize_with = "de_dimension")]
-    pub height: Option<u32>,
-    #[serde(default, deserialize_with = "de_check_spp")]
-    pub spp: Option<u32>,
-    pub same_as: Option<String>,
-    pub mean: Option<Rgb>,
-    pub range: Option<Range>,
-}
+pub use crate::scene::check::{CheckDesc, Range};
 
 /// The part of a scene file the check code reads; the rest is the scene's.
 #[derive(Default, Deserialize)]
 struct CheckFile {
     #[serde(default)]
     check: Option<CheckDesc>,
-}
-
-/// `[lo, hi]` with 0 <= lo <= hi, finite.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Range(pub f64, pub f64);
-
-impl<'de> Deserialize<'de> for Range {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let [lo, hi] = <[f64; 2]>::deserialize(d)?;
-        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
-            return Err(de::Error::custom(format!(
-                "range must be [lo, hi] with 0 <= lo <= hi, finite, got [{lo}, {hi}]"
-            )));
-        }
-        Ok(Range(lo, hi))
-    }
-}
-
-/// Variances need two samples per pixel.
-fn de_check_spp<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
-    let spp = de_count(d)?;
-    if spp.is_some_and(|s| s < 2) {
-        return Err(de::Error::custom(
-            "a check needs at least 2 samples per pixel (for the variance)",
-        ));
-    }
-    Ok(spp)
 }
 
 /// Scene text to check, with where it came from.
@@ -101,19 +51,18 @@ pub struct Source {
 pub enum CheckError {
     #[error(transparent)]
     Scene(#[from] SceneError),
-    #[error("{scene}: {source}")]
-    Render { scene: String, source: RenderError },
+    #[error("{scene}: {error}")]
+    Render { scene: String, error: RenderError },
 }
 
 /// Find a scene by file path, extreme scene name (with or without `extreme/`), or built-in name.
 pub fn resolve(spec: &str, dir: Option<&Path>) -> Result<Source, SceneError> {
     let candidates = [dir.map(|d| d.join(spec)), Some(PathBuf::from(spec))];
     for path in candidates.into_iter().flatten() {
-        if path.is_file() {
-            let text = std::fs::read_to_string(&path).map_err(|source| SceneError::Io {
-                path: path.clone(),
-                source,
-            })?;
+        if std::fs::symlink_metadata(&path).is_ok() {
+            // A file or a pipe, as any scene; a directory or a device is refused
+            // (`crate::input`).
+            let text = input::read_text(&input::Source::Path(path.clone()), "scene file")?;
             return Ok(Source {
                 name: path.display().to_string(),
                 dir: path.parent().map(Path::to_path_buf),
@@ -228,13 +177,13 @@ pub fn run(source: &Source, options: &Options) -> Result<Outcome, CheckError> {
     let settings = RenderSettings::merged(&[&scene.render, &layer]);
     let pool = build_pool(settings.threads).map_err(|e| CheckError::Render {
         scene: source.name.clone(),
-        source: e,
+        error: e,
     })?;
     let render = |scene: Arc<scene::Scene>, settings: RenderSettings| {
         let mut r =
             Renderer::with_pool(scene, settings, pool.clone()).map_err(|e| CheckError::Render {
                 scene: source.name.clone(),
-                source: e,
+                error: e,
             })?;
         r.render(&AtomicBool::new(false), |_| true);
         Ok::<_, CheckError>(r)

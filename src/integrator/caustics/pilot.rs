@@ -81,6 +81,7 @@ fn pilot_mean_luminance(scene: &Scene, settings: &RenderSettings) -> f64 {
             &mut sampler,
             u32::MAX,
             None,
+            crate::settings::Strategy::Mis,
         ));
     }
     let mean = sum / PILOT_CAMERA_PATHS as f64;

@@ -65,6 +65,13 @@ impl CausticTracer {
         if settings.max_depth.is_some() {
             return Err("path-traced (a depth limit is set)".into());
         }
+        if settings.strategy != crate::settings::Strategy::Mis {
+            // Its joins are weighed against the camera paths by MIS.
+            return Err(format!(
+                "path-traced (strategy {}, not mis)",
+                settings.strategy.name()
+            ));
+        }
         let lens = scene
             .camera
             .with_lens_settings(settings.aperture, settings.focus_distance);
@@ -80,6 +87,16 @@ impl CausticTracer {
         }
         if scene.lights.is_empty() {
             return Err("none (no emitters)".into());
+        }
+        if let Some(m) = scene.materials.iter().find(|m| !m.kind.is_smallpt()) {
+            // Its splats and joins assume diffuse, mirror and smooth glass vertices: a glossy
+            // one has neither a bounded BSDF for the joins' roulette nor a delta chain's
+            // bookkeeping. Glossy paths stay with the camera paths, which handle them by MIS.
+            return Err(format!(
+                "path-traced (the light tracer handles diffuse, mirror and glass; the scene \
+                 has {})",
+                m.kind.describe()
+            ));
         }
         let mut targets = Vec::new();
         for p in scene.prims.iter() {

@@ -5,7 +5,9 @@
 //! swallows the queries) times out: half-blocks then. TERM is never consulted.
 //!
 //! The queries are sent and answered before the input thread starts reading, so no reply byte
-//! reaches the key handling.
+//! reaches the key handling. Keys typed meanwhile (a `q` pressed while a loaded machine starts
+//! ptui) are read with the replies: they are handed back, in order, to be handled as keys
+//! (`tui::event::keys_from_bytes`); they used to be dropped, and ptui then did not quit.
 
 use super::kitty;
 use std::io::{self, Write};
@@ -24,22 +26,30 @@ pub struct Support {
 
 /// Read the replies to the queries in `bytes`.
 pub fn parse(bytes: &[u8]) -> Support {
+    split(bytes).0
+}
+
+/// The replies to the queries in `bytes`, and every other byte (what the user typed), in order.
+pub fn split(bytes: &[u8]) -> (Support, Vec<u8>) {
     let mut s = Support::default();
+    let mut typed = Vec::new();
     let mut k = 0;
     while k < bytes.len() {
         if bytes[k] != 0x1b {
+            typed.push(bytes[k]);
             k += 1;
             continue;
         }
         let rest = &bytes[k + 1..];
         if let Some(apc) = rest.strip_prefix(b"_G") {
-            // ESC _ G i=31;OK ESC \ (or an error message instead of OK).
-            let end = find(apc, b"\x1b\\").unwrap_or(apc.len());
-            let body = &apc[..end];
+            // ESC _ G i=31;OK ESC \ (or an error message instead of OK), up to and past the
+            // terminator, which is no Esc key.
+            let end = find(apc, b"\x1b\\");
+            let body = &apc[..end.unwrap_or(apc.len())];
             if body.starts_with(b"i=31;") && body.ends_with(b"OK") {
                 s.kitty = true;
             }
-            k += 3 + end;
+            k += 3 + end.map_or(apc.len(), |e| e + 2);
         } else if let Some(csi) = rest.strip_prefix(b"[") {
             let end = csi
                 .iter()
@@ -51,21 +61,24 @@ pub fn parse(bytes: &[u8]) -> Support {
                     s.answered = true;
                     s.sixel = numbers(&params[1..]).iter().skip(1).any(|&n| n == 4);
                 }
-                Some(b't') => {
+                Some(b't') if params.first() == Some(&b'6') => {
                     if let [6, h, w] = numbers(params)[..] {
                         if w > 0 && h > 0 && w <= 1000 && h <= 1000 {
                             s.cell = Some((w as u16, h as u16));
                         }
                     }
                 }
-                _ => {}
+                // Not a reply: a key (an arrow, Shift-Tab).
+                _ => typed.extend_from_slice(&bytes[k..(k + 3 + end).min(bytes.len())]),
             }
-            k += 2 + end;
+            k += 3 + end;
         } else {
+            // Esc, or Alt with a key.
+            typed.push(0x1b);
             k += 1;
         }
     }
-    s
+    (s, typed)
 }
 
 fn numbers(params: &[u8]) -> Vec<u32> {
@@ -85,9 +98,9 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
 }
 
 /// Ask the terminal (in raw mode, before anything else reads stdin) and wait for the DA1 reply
-/// at most `timeout`.
+/// at most `timeout`; with the answers, the bytes typed meanwhile.
 #[cfg(unix)]
-pub fn query(timeout: Duration) -> io::Result<Support> {
+pub fn query(timeout: Duration) -> io::Result<(Support, Vec<u8>)> {
     let mut out = io::stdout();
     out.write_all(kitty::QUERY)?;
     out.write_all(b"\x1b[16t\x1b[c")?;
@@ -127,12 +140,12 @@ pub fn query(timeout: Duration) -> io::Result<Support> {
             break;
         }
     }
-    Ok(parse(&got))
+    Ok(split(&got))
 }
 
 #[cfg(not(unix))]
-pub fn query(_timeout: Duration) -> io::Result<Support> {
-    Ok(Support::default())
+pub fn query(_timeout: Duration) -> io::Result<(Support, Vec<u8>)> {
+    Ok((Support::default(), Vec::new()))
 }
 
 /// The cell size in pixels from the kernel's window size, if the terminal reports pixels.
@@ -167,6 +180,17 @@ mod tests {
                 answered: true
             }
         );
+    }
+
+    /// Keys typed while the terminal answers are handed back in order, replies taken out:
+    /// a `q` pressed during the probe used to be dropped (and ptui did not quit).
+    #[test]
+    fn keys_typed_during_the_query_are_kept() {
+        let (s, typed) = split(b"q\x1b_Gi=31;OK\x1b\\\x1b[A\x1b[6;20;10tj\x1b\x1b[?62;22c\r");
+        assert!(s.kitty && s.answered && s.cell == Some((10, 20)));
+        assert_eq!(typed, b"q\x1b[Aj\x1b\r");
+        let (s, typed) = split(b"\x1b[?1;2c");
+        assert!(s.answered && typed.is_empty());
     }
 
     #[test]

@@ -1,0 +1,289 @@
+//! A scene object's material keys turned into a [`Material`], each key checked against the
+//! material it is given to, with the error at that key.
+//!
+//! | key | applies to | default |
+//! |---|---|---|
+//! | `material` | | `diffuse` |
+//! | `color` | all (conductor: a factor on the reflectance) | 0.75; conductor 1; emitters 0 |
+//! | `emission`, `two_sided` | all | 0; front face only |
+//! | `ior` | glass, plastic | 1.5; plastic 1.49 |
+//! | `alpha` or `alpha_u` + `alpha_v` | glass, conductor (`alpha` also plastic) | 0 (smooth) |
+//! | `distribution` | glass, conductor, plastic | `ggx` |
+//! | `metal`, or `eta` + `k` | conductor | Fresnel 1 |
+//! | `specular` | plastic | 1 |
+
+use super::description::{DistributionName, MaterialDesc, MaterialName};
+use super::SceneError;
+use crate::material::{
+    metals, ConductorFresnel, Distribution, Glossy, Material, MaterialKind, Microfacet,
+    RoughDielectric, SPECULAR_ALPHA,
+};
+use crate::math::DVec3;
+use std::ops::Range;
+use toml::Spanned;
+
+/// Default reflectance of an object that states none (and is not a light).
+pub const DEFAULT_COLOR: f64 = 0.75;
+/// Default index of refraction of glass.
+pub const DEFAULT_IOR: f64 = 1.5;
+/// Default index of a plastic's coat: polypropylene, Mitsuba's default.
+pub const DEFAULT_PLASTIC_IOR: f64 = 1.49;
+
+/// Where an object's material keys are read from, for errors.
+struct At<'a> {
+    src: &'a str,
+    file: &'a str,
+    object: &'a str,
+}
+
+impl At<'_> {
+    fn err(&self, span: Range<usize>, key: &str, msg: impl Into<String>) -> SceneError {
+        SceneError::at(
+            self.file,
+            self.src,
+            Some(span),
+            Some(format!("{}.{key}", self.object)),
+            msg,
+        )
+    }
+
+    /// `key` (if given) must belong to one of `kinds`.
+    fn only<T>(
+        &self,
+        value: &Option<Spanned<T>>,
+        key: &str,
+        kind: MaterialName,
+        kinds: &[MaterialName],
+    ) -> Result<(), SceneError> {
+        match value {
+            Some(v) if !kinds.contains(&kind) => {
+                let names: Vec<String> = kinds
+                    .iter()
+                    .map(|k| format!("\"{}\"", k.as_str()))
+                    .collect();
+                Err(self.err(
+                    v.span(),
+                    key,
+                    format!(
+                        "`{key}` only applies to material = {} (this is \"{}\")",
+                        names.join(" or "),
+                        kind.as_str()
+                    ),
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// The material of an object; `flat` for a triangle, quad or mesh (whose emission may be
+/// one-sided), not a sphere.
+pub fn build_material(
+    m: &MaterialDesc,
+    src: &str,
+    file: &str,
+    object: &str,
+    flat: bool,
+) -> Result<Material, SceneError> {
+    use MaterialName::*;
+    let at = At { src, file, object };
+    let kind_name = m.material.unwrap_or_default();
+    let emission = m.emission.map_or(DVec3::ZERO, |e| DVec3::from_array(e.0));
+    // Emitters do not reflect unless the scene gives them a colour; a conductor's colour is a
+    // factor on its Fresnel reflectance.
+    let default_color = if emission.max_element() > 0.0 {
+        0.0
+    } else if kind_name == Conductor {
+        1.0
+    } else {
+        DEFAULT_COLOR
+    };
+    let color = m
+        .color
+        .map_or(DVec3::splat(default_color), |c| DVec3::from_array(c.0));
+    at.only(&m.ior, "ior", kind_name, &[Glass, Plastic])?;
+    at.only(&m.alpha, "alpha", kind_name, &[Glass, Conductor, Plastic])?;
+    at.only(&m.alpha_u, "alpha_u", kind_name, &[Glass, Conductor])?;
+    at.only(&m.alpha_v, "alpha_v", kind_name, &[Glass, Conductor])?;
+    at.only(
+        &m.distribution,
+        "distribution",
+        kind_name,
+        &[Glass, Conductor, Plastic],
+    )?;
+    at.only(&m.eta, "eta", kind_name, &[Conductor])?;
+    at.only(&m.k, "k", kind_name, &[Conductor])?;
+    at.only(&m.metal, "metal", kind_name, &[Conductor])?;
+    at.only(&m.specular, "specular", kind_name, &[Plastic])?;
+    let distribution = roughness(m, &at)?;
+    let ior = |default: f64| m.ior.as_ref().map_or(default, |i| i.get_ref().0);
+    let kind = match kind_name {
+        Diffuse => MaterialKind::Diffuse,
+        Mirror => MaterialKind::Mirror,
+        Glass => match distribution {
+            None => MaterialKind::Glass {
+                ior: ior(DEFAULT_IOR),
+            },
+            Some(distribution) => Glossy::RoughGlass(RoughDielectric {
+                distribution,
+                ior: ior(DEFAULT_IOR),
+            })
+            .kind(),
+        },
+        Conductor => {
+            let fresnel = conductor_fresnel(m, &at)?;
+            match distribution {
+                None => MaterialKind::SmoothConductor(Box::new(fresnel)),
+                Some(distribution) => Glossy::Conductor(crate::material::Conductor {
+                    distribution,
+                    fresnel,
+                })
+                .kind(),
+            }
+        }
+        Plastic => {
+            let specular = m
+                .specular
+                .as_ref()
+                .map_or(DVec3::ONE, |s| DVec3::from_array(s.get_ref().0));
+            let mean = color.element_sum() / 3.0;
+            Glossy::Plastic(crate::material::Plastic::new(
+                ior(DEFAULT_PLASTIC_IOR),
+                specular,
+                mean,
+                distribution,
+            ))
+            .kind()
+        }
+    };
+    if let Some(two_sided) = &m.two_sided {
+        let problem = if !flat {
+            Some("`two_sided` applies to triangles, quads and meshes: a sphere emits outwards")
+        } else if emission.max_element() <= 0.0 {
+            Some("`two_sided` only applies to emitters (objects with an `emission`)")
+        } else {
+            None
+        };
+        if let Some(problem) = problem {
+            return Err(at.err(two_sided.span(), "two_sided", problem));
+        }
+    }
+    // Flat emitters emit from their front face alone unless asked, as in pbrt and Mitsuba.
+    let one_sided = flat && !m.two_sided.as_ref().is_some_and(|t| *t.get_ref());
+    Ok(Material {
+        kind,
+        color,
+        emission,
+        one_sided,
+    })
+}
+
+/// The microfacet distribution the keys ask for, or None for a smooth surface: `alpha`, or
+/// `alpha_u` with `alpha_v`, below [`SPECULAR_ALPHA`] in both directions is smooth; above it a
+/// direction's roughness is at least that (as Mitsuba clamps).
+fn roughness(m: &MaterialDesc, at: &At) -> Result<Option<Distribution>, SceneError> {
+    let (alpha_u, alpha_v) = match (&m.alpha, &m.alpha_u, &m.alpha_v) {
+        (Some(a), None, None) => (a.get_ref().0, a.get_ref().0),
+        (None, Some(u), Some(v)) => (u.get_ref().0, v.get_ref().0),
+        (None, None, None) => (0.0, 0.0),
+        (Some(_), Some(x), _) | (Some(_), None, Some(x)) => {
+            return Err(at.err(
+                x.span(),
+                if m.alpha_u.is_some() {
+                    "alpha_u"
+                } else {
+                    "alpha_v"
+                },
+                "give either `alpha` (isotropic) or `alpha_u` and `alpha_v`, not both",
+            ))
+        }
+        (None, Some(x), None) | (None, None, Some(x)) => {
+            let (given, missing) = if m.alpha_u.is_some() {
+                ("alpha_u", "alpha_v")
+            } else {
+                ("alpha_v", "alpha_u")
+            };
+            return Err(at.err(
+                x.span(),
+                given,
+                format!("`{given}` needs `{missing}` too (or use `alpha`)"),
+            ));
+        }
+    };
+    if alpha_u.max(alpha_v) < SPECULAR_ALPHA {
+        return Ok(None);
+    }
+    let kind = match m.distribution.as_ref().map(|d| *d.get_ref()) {
+        None | Some(DistributionName::Ggx) => Microfacet::Ggx,
+        Some(DistributionName::Beckmann) => Microfacet::Beckmann,
+    };
+    Ok(Some(Distribution::new(
+        kind,
+        alpha_u.max(SPECULAR_ALPHA),
+        alpha_v.max(SPECULAR_ALPHA),
+    )))
+}
+
+/// A conductor's Fresnel term: a named metal, an explicit complex index, or none (1).
+fn conductor_fresnel(m: &MaterialDesc, at: &At) -> Result<ConductorFresnel, SceneError> {
+    match (&m.metal, &m.eta, &m.k) {
+        (Some(name), None, None) => match metals::lookup(name.get_ref()) {
+            Some((eta, k)) => Ok(ConductorFresnel::Complex { eta, k }),
+            None => Err(at.err(
+                name.span(),
+                "metal",
+                format!(
+                    "unknown metal `{}`; known: {}",
+                    name.get_ref(),
+                    metals::names().collect::<Vec<_>>().join(", ")
+                ),
+            )),
+        },
+        (Some(_), Some(x), _) | (Some(_), None, Some(x)) => Err(at.err(
+            x.span(),
+            if m.eta.is_some() { "eta" } else { "k" },
+            "give either `metal` or `eta` and `k`, not both",
+        )),
+        (None, Some(eta), Some(k)) => Ok(ConductorFresnel::Complex {
+            eta: DVec3::from_array(eta.get_ref().0),
+            k: DVec3::from_array(k.get_ref().0),
+        }),
+        (None, Some(x), None) | (None, None, Some(x)) => {
+            let (given, missing) = if m.eta.is_some() {
+                ("eta", "k (the absorption; 0 for none)")
+            } else {
+                ("k", "eta (the real part of the index)")
+            };
+            Err(at.err(x.span(), given, format!("`{given}` needs `{missing}` too")))
+        }
+        (None, None, None) => Ok(ConductorFresnel::None),
+    }
+}
+
+/// The materials a scene's objects use, in order of first use, with how many objects use each:
+/// what the summaries list.
+pub fn describe(materials: &[Material]) -> String {
+    let mut seen: Vec<(String, usize)> = Vec::new();
+    for m in materials {
+        // A light that does not reflect is listed as what it is.
+        let d = if m.is_emissive() && m.color == DVec3::ZERO {
+            "emitter".to_string()
+        } else {
+            m.kind.describe()
+        };
+        match seen.iter_mut().find(|(s, _)| *s == d) {
+            Some((_, n)) => *n += 1,
+            None => seen.push((d, 1)),
+        }
+    }
+    seen.iter()
+        .map(|(d, n)| {
+            if *n == 1 {
+                d.clone()
+            } else {
+                format!("{d} x{n}")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
