@@ -13,7 +13,7 @@
 //!
 //! f(wo, wi) = F(wo . h) D(h) G1(wo) G1(wi) / (4 cos_o cos_i), h the half vector. Sampling
 //! picks a visible normal m from wo and reflects wo about it, so the weight f cos / pdf is
-//! F G1(wi) alone.
+//! F G1(wi) alone (for Beckmann times G1(wo) / G1_visible(wo), see `Distribution::g1_visible`).
 
 use super::microfacet::Distribution;
 use super::shading;
@@ -73,7 +73,10 @@ impl Conductor {
             return None;
         }
         let pdf = d.pdf_visible(wo_l, m) / (4.0 * wo_l.dot(m));
-        let weight = color * self.fresnel.reflectance(wo_l.dot(m)) * g1;
+        // f cos / pdf: F G1(wi), times G1(wo) / G1_visible(wo) where the BSDF's G1 is a fit
+        // to the one the normals are sampled with (Beckmann; 1 for GGX).
+        let masking = g1 * (d.g1(wo_l, m) / d.g1_visible(wo_l, m));
+        let weight = color * self.fresnel.reflectance(wo_l.dot(m)) * masking;
         if !(pdf > 0.0 && pdf.is_finite() && weight.is_finite()) {
             return None;
         }
@@ -113,7 +116,7 @@ impl Conductor {
         let f_cos = color * self.fresnel.reflectance(wo_l.dot(h)) * (dh * g / (4.0 * wo_l.z));
         BsdfEval {
             f_cos,
-            pdf: dh * g1_o / (4.0 * wo_l.z),
+            pdf: dh * d.g1_visible(wo_l, h) / (4.0 * wo_l.z),
         }
     }
 }

@@ -85,7 +85,8 @@ impl RoughDielectric {
             return None;
         }
         let pdf = d.pdf_visible(wo_l * side, m) * lobe_pdf * dwi.abs();
-        let weight = weight * g1;
+        // G1(wi), times G1(wo) / G1_visible(wo) where the BSDF's G1 is a fit (Beckmann).
+        let weight = weight * (g1 * (d.g1(wo_l, m) / d.g1_visible(wo_l, m)));
         if !(pdf > 0.0 && pdf.is_finite() && weight.is_finite()) {
             return None;
         }

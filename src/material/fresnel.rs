@@ -1,6 +1,7 @@
 //! Exact Fresnel reflectance for unpolarised light: of a dielectric interface, of a conductor
 //! (a complex index of refraction), and the fitted hemispherical average plastic needs.
 
+use crate::math::quadrature::gauss_legendre;
 use crate::math::DVec3;
 
 /// Result of [`dielectric`]: the reflectance and the cosine of the refracted direction.
@@ -49,7 +50,13 @@ pub fn conductor(cos_i: f64, eta: DVec3, k: DVec3) -> DVec3 {
         let r_s = (term1 - term2) / (term1 + term2);
         let term3 = a2pb2 * cos2 + sin4;
         let term4 = term2 * sin2;
-        let r_p = r_s * (term3 - term4) / (term3 + term4);
+        // Both vanish only at normal incidence on eta = k = 0, where the polarisations agree
+        // (0 / 0 made the reflectance NaN there).
+        let r_p = if term3 + term4 > 0.0 {
+            r_s * (term3 - term4) / (term3 + term4)
+        } else {
+            r_s
+        };
         0.5 * (r_s + r_p)
     };
     DVec3::new(one(eta.x, k.x), one(eta.y, k.y), one(eta.z, k.z))
@@ -68,6 +75,27 @@ pub fn diffuse_reflectance(eta: f64) -> f64 {
         let c = [0.919317, -3.4793, 6.75335, -7.80989, 4.98554, -1.36881];
         c.iter().rev().fold(0.0, |acc, &ci| acc * inv + ci)
     }
+}
+
+/// The exact hemispherical average of [`dielectric`]'s reflectance, 2 int_0^1 F(mu, eta) mu dmu,
+/// for relative index `eta`: total internal reflection (F = 1) below the critical cosine, and
+/// Gauss-Legendre quadrature above it in s, mu^2 = t_c + (1 - t_c) s^2, which turns F's
+/// square-root edge there (and at grazing incidence) into a smooth function of s.
+pub fn hemispherical_reflectance(eta: f64) -> f64 {
+    // mu_c^2 = 1 - eta^2 below 1, none (0) from the less dense side.
+    let t_c = (1.0 - eta * eta).max(0.0);
+    let (nodes, weights) = gauss_legendre(48);
+    let above: f64 = nodes
+        .iter()
+        .zip(&weights)
+        .map(|(x, w)| {
+            let s = 0.5 * (x + 1.0);
+            let mu = (t_c + (1.0 - t_c) * s * s).sqrt();
+            // dt = 2 (1 - t_c) s ds, ds = dx / 2.
+            dielectric(mu, eta).reflectance * (1.0 - t_c) * s * w
+        })
+        .sum();
+    t_c + above
 }
 
 #[cfg(test)]
@@ -141,6 +169,29 @@ mod tests {
         }
     }
 
+    /// The quadrature against the midpoint rule on 200,000 nodes in mu^2, and against the
+    /// identity 1 - R(1 / eta) = (1 - R(eta)) / eta^2 (the light a hemisphere sends through
+    /// an interface, seen from either side, differs only by the compression of solid angle).
+    #[test]
+    fn hemispherical_reflectance_is_the_integral() {
+        for eta in [1.0001, 1.1, 1.49, 2.0, 3.0, 10.0] {
+            for e in [eta, 1.0 / eta] {
+                let n = 200_000;
+                let midpoint: f64 = (0..n)
+                    .map(|i| dielectric(((i as f64 + 0.5) / n as f64).sqrt(), e).reflectance)
+                    .sum::<f64>()
+                    / n as f64;
+                let r = hemispherical_reflectance(e);
+                assert!((r - midpoint).abs() < 1e-6, "eta {e}: {r} vs {midpoint}");
+            }
+            let (out, inside) = (
+                hemispherical_reflectance(eta),
+                hemispherical_reflectance(1.0 / eta),
+            );
+            assert!(((1.0 - inside) - (1.0 - out) / (eta * eta)).abs() < 1e-9);
+        }
+    }
+
     /// k = 0 is a dielectric: the conductor formula must agree with the exact dielectric one.
     #[test]
     fn a_conductor_without_absorption_is_a_dielectric() {
@@ -157,6 +208,14 @@ mod tests {
             }
         }
         assert_eq!(conductor(0.3, DVec3::ZERO, DVec3::ONE), DVec3::ONE);
+        // eta = k = 0 (a scene may say so) reflects everything, normal incidence included.
+        for cos in [0.0, 0.5, 1.0] {
+            assert_eq!(
+                conductor(cos, DVec3::ZERO, DVec3::ZERO),
+                DVec3::ONE,
+                "cos {cos}"
+            );
+        }
         // Gold at normal incidence, from eta and k: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
         let (n, k) = (0.2, 3.0);
         let want = ((n - 1.0f64).powi(2) + k * k) / ((n + 1.0f64).powi(2) + k * k);

@@ -9,7 +9,9 @@
 //! Shadowing-masking is Smith's *separable* form G = G1(wo) G1(wi), Mitsuba's: the references
 //! the materials are held to are Mitsuba's, and the height-correlated form (pbrt-v4's) is
 //! brighter at grazing angles by up to a few percent, which the reference tests would see.
-//! Beckmann's G1 is Walter et al.'s rational fit (under 0.35% relative error), as Mitsuba's.
+//! Beckmann's G1 is Walter et al.'s rational fit (under 0.35% relative error), as Mitsuba's;
+//! the density of the sampled visible normals takes the exact one (`g1_visible`), the one the
+//! sampler draws from.
 //!
 //! Visible normals are sampled by Heitz 2018 ("A Simpler and Exact Sampling Routine for the GGX
 //! Distribution of Visible Normals") for GGX and by Jakob 2014's numerical inversion for
@@ -17,7 +19,7 @@
 
 use crate::math::DVec3;
 use crate::sampling::warp;
-use statrs::function::erf::{erf, erf_inv};
+use statrs::function::erf::{erf, erf_inv, erfc};
 use std::f64::consts::PI;
 
 /// Which normal distribution function.
@@ -81,18 +83,16 @@ impl Distribution {
     }
 
     /// Smith's masking function for direction `v` and microfacet normal `m`: zero where `v` sees
-    /// the back of the microfacet (v . m and v . n of different signs).
+    /// the back of the microfacet (v . m and v . n of different signs). Beckmann's is Walter's
+    /// rational fit, as Mitsuba's: what the BSDFs' values use.
     #[inline]
     pub fn g1(&self, v: DVec3, m: DVec3) -> f64 {
-        if v.dot(m) * v.z <= 0.0 {
+        let Some(tan2) = self.masking_tan2(v, m) else {
             return 0.0;
-        }
-        let xy = (self.alpha_u * v.x).powi(2) + (self.alpha_v * v.y).powi(2);
-        if xy == 0.0 {
+        };
+        if tan2 == 0.0 {
             return 1.0;
         }
-        // tan^2 of v's angle, stretched by the roughness along v's azimuth.
-        let tan2 = xy / (v.z * v.z);
         match self.kind {
             Microfacet::Ggx => 2.0 / (1.0 + (1.0 + tan2).sqrt()),
             Microfacet::Beckmann => {
@@ -106,6 +106,44 @@ impl Distribution {
         }
     }
 
+    /// The G1 of the distribution [`Distribution::sample_visible`] draws from: [`Distribution::g1`]
+    /// for GGX, and for Beckmann the exact Smith form 1 / (1 + Lambda(a)), Lambda(a) =
+    /// (erf(a) - 1) / 2 + exp(-a^2) / (2 a sqrt(pi)) (Walter's eq. 26), of which `g1` is a fit.
+    /// The visible normals are sampled exactly (Jakob 2014), so their density must carry the
+    /// exact G1 to integrate to 1: with the fit it integrated to G1_fit / G1_exact (up to 1.0035
+    /// at grazing views), so the chi-square tests failed there and the sampled weights
+    /// f cos / pdf were biased by the inverse ratio against light samples (Mitsuba's
+    /// `roughconductor` and `roughdielectric` share this). The BSDFs keep the fit in f.
+    #[inline]
+    pub fn g1_visible(&self, v: DVec3, m: DVec3) -> f64 {
+        match self.kind {
+            Microfacet::Ggx => self.g1(v, m),
+            Microfacet::Beckmann => {
+                let Some(tan2) = self.masking_tan2(v, m) else {
+                    return 0.0;
+                };
+                if tan2 == 0.0 {
+                    return 1.0;
+                }
+                let a = 1.0 / tan2.sqrt();
+                // -erfc(a) / 2 rather than (erf(a) - 1) / 2: both terms vanish for large a.
+                let lambda = 0.5 * (INV_SQRT_PI * (-a * a).exp() / a - erfc(a));
+                1.0 / (1.0 + lambda.max(0.0))
+            }
+        }
+    }
+
+    /// tan^2 of `v`'s angle to the surface normal, stretched by the roughness along `v`'s
+    /// azimuth; None where `v` sees the back of microfacet `m`.
+    #[inline(always)]
+    fn masking_tan2(&self, v: DVec3, m: DVec3) -> Option<f64> {
+        if v.dot(m) * v.z <= 0.0 {
+            return None;
+        }
+        let xy = (self.alpha_u * v.x).powi(2) + (self.alpha_v * v.y).powi(2);
+        Some(xy / (v.z * v.z))
+    }
+
     /// Separable shadowing-masking G1(wo) G1(wi).
     #[inline]
     pub fn g(&self, wo: DVec3, wi: DVec3, m: DVec3) -> f64 {
@@ -113,13 +151,13 @@ impl Distribution {
     }
 
     /// The density of [`Distribution::sample_visible`]'s normals: D_v(m) = G1(v, m) |v . m|
-    /// D(m) / v.z, for `v` above the surface.
+    /// D(m) / v.z with the exact G1 ([`Distribution::g1_visible`]), for `v` above the surface.
     #[inline]
     pub fn pdf_visible(&self, v: DVec3, m: DVec3) -> f64 {
         if v.z <= 0.0 {
             return 0.0;
         }
-        self.d(m) * self.g1(v, m) * v.dot(m).abs() / v.z
+        self.d(m) * self.g1_visible(v, m) * v.dot(m).abs() / v.z
     }
 
     /// A microfacet normal seen from `v` (above the surface, v.z > 0), with density
@@ -239,10 +277,9 @@ mod tests {
                             sum += d.pdf_visible(v, m) * dcos * (2.0 * PI / n_p as f64);
                         }
                     }
-                    // Beckmann's G1 is a fit within 0.35%.
-                    let tol = if kind == Microfacet::Ggx { 3e-3 } else { 6e-3 };
+                    // With the fitted G1 Beckmann's missed by up to 0.35%.
                     assert!(
-                        (sum - 1.0).abs() < tol,
+                        (sum - 1.0).abs() < 3e-3,
                         "{kind:?} a={alpha} cos={cos_v}: {sum}"
                     );
                 }

@@ -7,7 +7,7 @@
 //! | `color` | all (conductor: a factor on the reflectance) | 0.75; conductor 1; emitters 0 |
 //! | `emission`, `two_sided` | all | 0; front face only |
 //! | `ior` | glass, plastic | 1.5; plastic 1.49 |
-//! | `alpha` or `alpha_u` + `alpha_v` | glass, conductor (`alpha` also plastic) | 0 (smooth) |
+//! | `alpha` or `alpha_u` + `alpha_v` | glass, conductor (`alpha` also plastic) | 0 (smooth); glass of `ior` 1 is smooth |
 //! | `distribution` | glass, conductor, plastic | `ggx` |
 //! | `metal`, or `eta` + `k` | conductor | Fresnel 1 |
 //! | `specular` | plastic | 1 |
@@ -28,6 +28,14 @@ pub const DEFAULT_COLOR: f64 = 0.75;
 pub const DEFAULT_IOR: f64 = 1.5;
 /// Default index of a plastic's coat: polypropylene, Mitsuba's default.
 pub const DEFAULT_PLASTIC_IOR: f64 = 1.49;
+
+/// Glass whose index is within this of 1 is built smooth whatever its `alpha`: an interface the
+/// light barely sees (it turns rays by under 1e-6 radians and reflects under 1e-12 of them) has
+/// no roughness to show, and rough refraction's Jacobian divides by about (ior - 1)^2, so at
+/// index 1 every refracted sample had an infinite pdf and was dropped: the sphere rendered
+/// black, not invisible. (Mitsuba refuses equal indices; smooth glass of index 1 is ptui's
+/// `index-matched` extreme scene.)
+pub const INDEX_MATCHED: f64 = 1e-6;
 
 /// Where an object's material keys are read from, for errors.
 struct At<'a> {
@@ -121,14 +129,16 @@ pub fn build_material(
         Diffuse => MaterialKind::Diffuse,
         Mirror => MaterialKind::Mirror,
         Glass => match distribution {
-            None => MaterialKind::Glass {
+            Some(distribution) if (ior(DEFAULT_IOR) - 1.0).abs() > INDEX_MATCHED => {
+                Glossy::RoughGlass(RoughDielectric {
+                    distribution,
+                    ior: ior(DEFAULT_IOR),
+                })
+                .kind()
+            }
+            _ => MaterialKind::Glass {
                 ior: ior(DEFAULT_IOR),
             },
-            Some(distribution) => Glossy::RoughGlass(RoughDielectric {
-                distribution,
-                ior: ior(DEFAULT_IOR),
-            })
-            .kind(),
         },
         Conductor => {
             let fresnel = conductor_fresnel(m, &at)?;

@@ -7,7 +7,10 @@
 //! - stiff: furnaces of albedo 0.99 and 0.999 against Le / (1 - a), the camera inside a light
 //!   against the exact 0.5;
 //! - finite: grazing angles, total internal reflection, the critical angle, overlapping and
-//!   nested spheres, a light inside glass, silhouettes.
+//!   nested spheres, a light inside glass, silhouettes;
+//! - the microfacet materials: white glossy spheres under a uniform sky never above 1, a
+//!   conductor of index 1.0001 without absorption black, rough glass of index 1.0001
+//!   invisible, and every glossy extreme under a tiny light finite.
 
 use ptui::analysis::check::{run_extreme, Outcome};
 
@@ -74,4 +77,8 @@ extreme_tests! {
     nested => "nested",
     light_in_glass => "light-in-glass",
     silhouettes => "silhouettes",
+    glossy_furnace => "glossy-furnace",
+    glossy_extremes_under_a_tiny_light => "glossy-small-light",
+    conductor_of_index_1_is_black => "metal-index-1",
+    rough_glass_of_index_1_is_invisible => "glass-index-1",
 }

@@ -24,6 +24,7 @@ mod fuzz_obj;
 mod fuzz_scene;
 mod invariance_power;
 mod lens;
+mod materials;
 mod mesh;
 mod painterly;
 mod ray_count;

@@ -151,3 +151,66 @@ fn missing_file_and_unknown_builtin() {
         .to_string();
     assert_mentions(&e, &["directory"]);
 }
+
+/// The microfacet materials' keys: each misuse is one line naming the file, line and column of
+/// the offending value, the field and what is wrong with it.
+#[test]
+fn material_key_errors() {
+    let cases: [(&str, &str, &str, &str); 8] = [
+        (
+            "alpha = 0.1",
+            "bad.toml:14:9",
+            "alpha",
+            "`alpha` only applies to material = \"glass\" or \"conductor\" or \"plastic\" \
+             (this is \"diffuse\")",
+        ),
+        (
+            "material = \"conductor\"\neta = 0.2",
+            "bad.toml:15:7",
+            "eta",
+            "`eta` needs `k",
+        ),
+        (
+            "material = \"conductor\"\nmetal = \"Au\"\neta = 0.2",
+            "bad.toml:16:7",
+            "eta",
+            "either `metal` or `eta` and `k`",
+        ),
+        (
+            "material = \"conductor\"\nmetal = \"Unobtainium\"",
+            "bad.toml:15:9",
+            "metal",
+            "unknown metal `Unobtainium`; known: Ag, Al, Au",
+        ),
+        (
+            "material = \"conductor\"\nalpha = 0.1\nalpha_u = 0.2\nalpha_v = 0.3",
+            "bad.toml:16:11",
+            "alpha_u",
+            "either `alpha` (isotropic) or `alpha_u` and `alpha_v`",
+        ),
+        (
+            "material = \"glass\"\nspecular = 0.5",
+            "bad.toml:15:12",
+            "specular",
+            "`specular` only applies to material = \"plastic\" (this is \"glass\")",
+        ),
+        (
+            "material = \"conductor\"\nalpha = 2",
+            "bad.toml:15:9",
+            "alpha",
+            "roughness alpha must be between 0 (smooth) and 1, got 2",
+        ),
+        (
+            "material = \"plastic\"\nalpha_u = 0.1\nalpha_v = 0.2",
+            "bad.toml:15:11",
+            "alpha_u",
+            "`alpha_u` only applies to material = \"glass\" or \"conductor\"",
+        ),
+    ];
+    for (keys, at, field, problem) in cases {
+        let e = error_for("radius = 1", &format!("radius = 1\n{keys}"));
+        eprintln!("{e}");
+        assert_eq!(e.trim_end().lines().count(), 1, "not one line: {e}");
+        assert_mentions(&e, &[at, &format!("sphere[0].{field}"), problem]);
+    }
+}

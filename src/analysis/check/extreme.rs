@@ -80,6 +80,22 @@ pub const EXTREME: &[(&str, &str)] = &[
         "silhouettes",
         include_str!("../../../scenes/extreme/silhouettes.toml"),
     ),
+    (
+        "glossy-furnace",
+        include_str!("../../../scenes/extreme/glossy-furnace.toml"),
+    ),
+    (
+        "glossy-small-light",
+        include_str!("../../../scenes/extreme/glossy-small-light.toml"),
+    ),
+    (
+        "metal-index-1",
+        include_str!("../../../scenes/extreme/metal-index-1.toml"),
+    ),
+    (
+        "glass-index-1",
+        include_str!("../../../scenes/extreme/glass-index-1.toml"),
+    ),
 ];
 
 pub fn get(name: &str) -> Option<&'static str> {
