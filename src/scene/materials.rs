@@ -37,6 +37,37 @@ pub const DEFAULT_PLASTIC_IOR: f64 = 1.49;
 /// `index-matched` extreme scene.)
 pub const INDEX_MATCHED: f64 = 1e-6;
 
+/// The material keys that apply to some materials only, with those materials (the loader
+/// refuses them on any other; the TUI drops them when it steps an object to another material).
+/// `material`, `color`, `emission` and `two_sided` apply to all.
+pub const KEY_MATERIALS: &[(&str, &[MaterialName])] = {
+    use MaterialName::*;
+    &[
+        ("ior", &[Glass, Plastic]),
+        ("alpha", &[Glass, Conductor, Plastic]),
+        ("alpha_u", &[Glass, Conductor]),
+        ("alpha_v", &[Glass, Conductor]),
+        ("distribution", &[Glass, Conductor, Plastic]),
+        ("eta", &[Conductor]),
+        ("k", &[Conductor]),
+        ("metal", &[Conductor]),
+        ("specular", &[Plastic]),
+    ]
+};
+
+/// The materials `key` applies to: those [`KEY_MATERIALS`] lists, or all.
+fn materials_of(key: &str) -> &'static [MaterialName] {
+    KEY_MATERIALS
+        .iter()
+        .find(|(k, _)| *k == key)
+        .map_or(&MaterialName::ALL, |(_, kinds)| kinds)
+}
+
+/// Whether an object of material `kind` may set `key`.
+pub fn applies(key: &str, kind: MaterialName) -> bool {
+    materials_of(key).contains(&kind)
+}
+
 /// Where an object's material keys are read from, for errors.
 struct At<'a> {
     src: &'a str,
@@ -55,14 +86,14 @@ impl At<'_> {
         )
     }
 
-    /// `key` (if given) must belong to one of `kinds`.
+    /// `key` (if given) must be one [`applies`] to `kind`.
     fn only<T>(
         &self,
         value: &Option<Spanned<T>>,
         key: &str,
         kind: MaterialName,
-        kinds: &[MaterialName],
     ) -> Result<(), SceneError> {
+        let kinds = materials_of(key);
         match value {
             Some(v) if !kinds.contains(&kind) => {
                 let names: Vec<String> = kinds
@@ -109,20 +140,15 @@ pub fn build_material(
     let color = m
         .color
         .map_or(DVec3::splat(default_color), |c| DVec3::from_array(c.0));
-    at.only(&m.ior, "ior", kind_name, &[Glass, Plastic])?;
-    at.only(&m.alpha, "alpha", kind_name, &[Glass, Conductor, Plastic])?;
-    at.only(&m.alpha_u, "alpha_u", kind_name, &[Glass, Conductor])?;
-    at.only(&m.alpha_v, "alpha_v", kind_name, &[Glass, Conductor])?;
-    at.only(
-        &m.distribution,
-        "distribution",
-        kind_name,
-        &[Glass, Conductor, Plastic],
-    )?;
-    at.only(&m.eta, "eta", kind_name, &[Conductor])?;
-    at.only(&m.k, "k", kind_name, &[Conductor])?;
-    at.only(&m.metal, "metal", kind_name, &[Conductor])?;
-    at.only(&m.specular, "specular", kind_name, &[Plastic])?;
+    at.only(&m.ior, "ior", kind_name)?;
+    at.only(&m.alpha, "alpha", kind_name)?;
+    at.only(&m.alpha_u, "alpha_u", kind_name)?;
+    at.only(&m.alpha_v, "alpha_v", kind_name)?;
+    at.only(&m.distribution, "distribution", kind_name)?;
+    at.only(&m.eta, "eta", kind_name)?;
+    at.only(&m.k, "k", kind_name)?;
+    at.only(&m.metal, "metal", kind_name)?;
+    at.only(&m.specular, "specular", kind_name)?;
     let distribution = roughness(m, &at)?;
     let ior = |default: f64| m.ior.as_ref().map_or(default, |i| i.get_ref().0);
     let kind = match kind_name {

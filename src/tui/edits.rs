@@ -353,6 +353,7 @@ mod tests {
     use crate::session::{BuildNotes, JobStatus, Request, SessionEvent, Snapshot};
     use crate::settings::SettingsOverrides;
     use crate::tui::color::{ColorChoice, ColorMode};
+    use crate::tui::scene_form::object_field;
     use crossterm::event::KeyModifiers;
     use std::sync::Arc;
 
@@ -465,7 +466,7 @@ mod tests {
         app.view.center = Some((12.0, 24.0));
         assert!(press(&mut app, &[KeyCode::Char('o')]).is_empty());
         assert_eq!(app.picked.as_ref().unwrap().object.label(), "left (red)");
-        assert_eq!(app.form.field(), Field::Object(0));
+        assert_eq!(app.form.field(), object_field("material").unwrap());
         // colour: out of range first (the loader's message), then green.
         press(&mut app, &[KeyCode::Tab, KeyCode::Enter]);
         assert_eq!(app.form.editing.as_deref(), Some("[0.63, 0.065, 0.05]"));
@@ -487,7 +488,7 @@ mod tests {
             &mut app,
             &[KeyCode::BackTab, KeyCode::Enter, KeyCode::Enter],
         );
-        assert!(app.fields().contains(&Field::Object(2)));
+        assert!(app.fields().contains(&object_field("ior").unwrap()));
     }
 
     #[test]

@@ -5,11 +5,18 @@
 //! label, how its value is typed, when it applies and the loader's default. What is typed is
 //! read as a TOML value and set in the scene's text; the scene loader's checks (the same as a
 //! file's) decide whether it stands. A light also shows its power, which scales its `emission`.
+//! Which material keys an object shows follows the loader's own table of which materials take
+//! them ([`KEY_MATERIALS`](crate::scene::materials::KEY_MATERIALS)); stepping an object to
+//! another material drops those of its keys the new one does not take.
 
 use super::camera::value_number;
 use super::form::Field;
 use crate::math::{luminance, DVec3};
+use crate::scene::description::MaterialName;
 use crate::scene::edit::{number, parse_value, vector, Change, KeyPath, SceneDoc};
+use crate::scene::materials::{
+    applies, DEFAULT_COLOR, DEFAULT_IOR, DEFAULT_PLASTIC_IOR, KEY_MATERIALS,
+};
 use crate::scene::{Scene, SceneObject};
 use toml_edit::Value;
 
@@ -23,17 +30,35 @@ pub enum ValueKind {
     Number,
     /// true / false; Enter toggles.
     Bool,
+    /// A name typed (a metal); `none` removes the key.
+    Word,
 }
+
+/// The materials in the order Enter steps through them.
+const MATERIALS: [&str; 5] = {
+    let all = MaterialName::ALL;
+    [
+        all[0].as_str(),
+        all[1].as_str(),
+        all[2].as_str(),
+        all[3].as_str(),
+        all[4].as_str(),
+    ]
+};
 
 /// What decides which of its keys an object shows.
 #[derive(Clone, Copy, Debug)]
-pub struct Facts<'a> {
+pub struct Facts {
     /// Its `material` (the default if the file gives none).
-    pub material: &'a str,
+    pub material: MaterialName,
     /// Whether it emits.
     pub emitter: bool,
     /// A triangle, quad or mesh (not a sphere).
     pub flat: bool,
+    /// Its roughness is given as `alpha_u` and `alpha_v` rather than `alpha`.
+    pub anisotropic: bool,
+    /// A conductor's index is given as `eta` and `k` rather than a `metal`.
+    pub complex_index: bool,
 }
 
 /// One key of an object's table the form edits.
@@ -43,7 +68,7 @@ pub struct ObjectKey {
     pub kind: ValueKind,
     pub shown: fn(&Facts) -> bool,
     /// The loader's value when the file sets none.
-    pub default: fn(&Facts) -> &'static str,
+    pub default: fn(&Facts) -> String,
 }
 
 /// The object keys the form shows, in order.
@@ -51,40 +76,112 @@ pub const OBJECT_KEYS: &[ObjectKey] = &[
     ObjectKey {
         key: "material",
         label: "material",
-        kind: ValueKind::Choice(&["diffuse", "mirror", "glass"]),
+        kind: ValueKind::Choice(&MATERIALS),
         shown: |_| true,
-        default: |_| "diffuse",
+        default: |_| MaterialName::default().as_str().into(),
     },
     ObjectKey {
         key: "color",
         label: "colour",
         kind: ValueKind::Color,
         shown: |_| true,
-        // Emitters do not reflect unless the scene gives them a colour.
-        default: |f| if f.emitter { "0" } else { "0.75" },
+        // Emitters do not reflect unless the scene gives them a colour; a conductor's colour
+        // is a factor on its Fresnel reflectance.
+        default: |f| match (f.emitter, f.material) {
+            (true, _) => "0".into(),
+            (false, MaterialName::Conductor) => "1".into(),
+            _ => DEFAULT_COLOR.to_string(),
+        },
     },
     ObjectKey {
         key: "ior",
         label: "ior",
         kind: ValueKind::Number,
-        shown: |f| f.material == "glass",
-        default: |_| "1.5",
+        shown: |f| applies("ior", f.material),
+        default: |f| match f.material {
+            MaterialName::Plastic => DEFAULT_PLASTIC_IOR.to_string(),
+            _ => DEFAULT_IOR.to_string(),
+        },
+    },
+    ObjectKey {
+        key: "alpha",
+        label: "alpha",
+        kind: ValueKind::Number,
+        shown: |f| applies("alpha", f.material) && !f.anisotropic,
+        default: |_| "0".into(),
+    },
+    ObjectKey {
+        key: "alpha_u",
+        label: "alpha u",
+        kind: ValueKind::Number,
+        shown: |f| applies("alpha_u", f.material) && f.anisotropic,
+        default: |_| "0".into(),
+    },
+    ObjectKey {
+        key: "alpha_v",
+        label: "alpha v",
+        kind: ValueKind::Number,
+        shown: |f| applies("alpha_v", f.material) && f.anisotropic,
+        default: |_| "0".into(),
+    },
+    ObjectKey {
+        key: "distribution",
+        label: "distrib.",
+        kind: ValueKind::Choice(&["ggx", "beckmann"]),
+        shown: |f| applies("distribution", f.material),
+        default: |_| "ggx".into(),
+    },
+    ObjectKey {
+        key: "metal",
+        label: "metal",
+        kind: ValueKind::Word,
+        shown: |f| applies("metal", f.material) && !f.complex_index,
+        default: |_| "none".into(),
+    },
+    ObjectKey {
+        key: "eta",
+        label: "eta",
+        kind: ValueKind::Color,
+        shown: |f| applies("eta", f.material) && f.complex_index,
+        default: |_| "1".into(),
+    },
+    ObjectKey {
+        key: "k",
+        label: "k",
+        kind: ValueKind::Color,
+        shown: |f| applies("k", f.material) && f.complex_index,
+        default: |_| "0".into(),
+    },
+    ObjectKey {
+        key: "specular",
+        label: "specular",
+        kind: ValueKind::Color,
+        shown: |f| applies("specular", f.material),
+        default: |_| "1".into(),
     },
     ObjectKey {
         key: "emission",
         label: "emission",
         kind: ValueKind::Color,
         shown: |_| true,
-        default: |_| "0",
+        default: |_| "0".into(),
     },
     ObjectKey {
         key: "two_sided",
         label: "two-sided",
         kind: ValueKind::Bool,
         shown: |f| f.flat && f.emitter,
-        default: |_| "false",
+        default: |_| "false".into(),
     },
 ];
+
+/// The form's field for the object key `key`.
+pub fn object_field(key: &str) -> Option<Field> {
+    OBJECT_KEYS
+        .iter()
+        .position(|k| k.key == key)
+        .map(Field::Object)
+}
 
 /// The object picked with `o` (or a click), whose keys the form shows.
 #[derive(Clone, Debug, PartialEq)]
@@ -99,11 +196,13 @@ impl Picked {
     }
 
     /// What decides which keys it shows, from the scene's text as edited.
-    fn facts<'a>(&self, doc: &'a SceneDoc) -> Facts<'a> {
+    fn facts(&self, doc: &SceneDoc) -> Facts {
+        let set = |key: &str| doc.get(&self.key(key)).is_some();
         let material = doc
             .get(&self.key("material"))
             .and_then(Value::as_str)
-            .unwrap_or("diffuse");
+            .and_then(MaterialName::from_name)
+            .unwrap_or_default();
         let emitter = doc
             .get(&self.key("emission"))
             .and_then(rgb)
@@ -112,6 +211,8 @@ impl Picked {
             material,
             emitter,
             flat: self.object.table != "sphere",
+            anisotropic: set("alpha_u") || set("alpha_v"),
+            complex_index: set("eta") || set("k"),
         }
     }
 }
@@ -211,7 +312,7 @@ pub fn value(
             let key = &OBJECT_KEYS[k];
             match doc.get(&p.key(key.key)) {
                 Some(v) => text_of(v),
-                None => (key.default)(&p.facts(doc)).to_string(),
+                None => (key.default)(&p.facts(doc)),
             }
         }
         (Field::Power, Some(p)) => match scene {
@@ -233,7 +334,8 @@ pub fn cycles(field: Field) -> bool {
     )
 }
 
-/// The change that steps a choice or yes/no field to its next value.
+/// The change that steps a choice or yes/no field to its next value; a new material also drops
+/// the object's keys it does not take (one step of undo brings them back).
 pub fn cycle(field: Field, doc: &SceneDoc, picked: &Picked) -> Option<Change> {
     let Field::Object(k) = field else { return None };
     let key = &OBJECT_KEYS[k];
@@ -241,12 +343,26 @@ pub fn cycle(field: Field, doc: &SceneDoc, picked: &Picked) -> Option<Change> {
     let next = match key.kind {
         ValueKind::Choice(names) => {
             let i = names.iter().position(|n| *n == now).map_or(0, |i| i + 1);
-            Value::from(names[i % names.len()])
+            names[i % names.len()]
         }
-        ValueKind::Bool => Value::from(now != "true"),
+        ValueKind::Bool => {
+            let next = Value::from(now != "true");
+            return Some(change(picked.key(key.key), Some(next), picked));
+        }
         _ => return None,
     };
-    Some(change(picked.key(key.key), Some(next), picked))
+    let mut c = change(picked.key(key.key), Some(Value::from(next)), picked);
+    if let Some(material) = MaterialName::from_name(next).filter(|_| key.key == "material") {
+        c.sets.extend(
+            KEY_MATERIALS
+                .iter()
+                .filter(|(k, _)| !applies(k, material))
+                .map(|(k, _)| picked.key(k))
+                .filter(|k| doc.get(k).is_some())
+                .map(|k| (k, None)),
+        );
+    }
+    Some(c)
 }
 
 fn change(key: KeyPath, value: Option<Value>, picked: &Picked) -> Change {
@@ -295,7 +411,8 @@ pub fn commit(
         }
         (Field::Object(k), Some(p)) => {
             let key = p.key(OBJECT_KEYS[k].key);
-            let value = if t.is_empty() {
+            let none = OBJECT_KEYS[k].kind == ValueKind::Word && t == "none";
+            let value = if t.is_empty() || none {
                 None
             } else {
                 Some(parse_value(t).map_err(|e| format!("{key}: {e}"))?)
@@ -346,40 +463,154 @@ mod tests {
         Picked { object }
     }
 
+    fn f(key: &str) -> Field {
+        object_field(key).unwrap()
+    }
+
+    /// The labels of the object fields shown.
+    fn shown(doc: &SceneDoc, p: &Picked) -> Vec<&'static str> {
+        fields(doc, Some(p)).iter().map(|f| f.label()).collect()
+    }
+
+    /// Apply `c` and hold the text to the loader's checks.
+    fn apply(doc: &mut SceneDoc, c: Change) {
+        doc.apply(c).unwrap();
+        crate::scene::reload::check_text(&doc.spec, &doc.text()).unwrap();
+    }
+
     #[test]
     fn an_object_shows_the_keys_that_apply_to_it() {
         let (mut doc, scene) = cornell();
         let wall = picked(&scene, "left (red)");
+        assert_eq!(shown(&doc, &wall), ["material", "colour", "emission"]);
+        assert_eq!(value(f("material"), &doc, Some(&wall), None), "diffuse");
         assert_eq!(
-            fields(&doc, Some(&wall)),
-            vec![Field::Object(0), Field::Object(1), Field::Object(3)]
-        );
-        assert_eq!(value(Field::Object(0), &doc, Some(&wall), None), "diffuse");
-        assert_eq!(
-            value(Field::Object(1), &doc, Some(&wall), None),
+            value(f("color"), &doc, Some(&wall), None),
             "[0.63, 0.065, 0.05]"
         );
         // Glass shows its ior (the default until set).
-        let c = cycle(Field::Object(0), &doc, &wall).unwrap();
+        let c = cycle(f("material"), &doc, &wall).unwrap();
         assert_eq!(c.sets[0].1.as_ref().unwrap().as_str(), Some("mirror"));
-        doc.apply(commit(Field::Object(0), "glass", &doc, Some(&wall), None).unwrap())
+        doc.apply(commit(f("material"), "glass", &doc, Some(&wall), None).unwrap())
             .unwrap();
-        assert!(fields(&doc, Some(&wall)).contains(&Field::Object(2)));
-        assert_eq!(value(Field::Object(2), &doc, Some(&wall), None), "1.5");
+        assert!(fields(&doc, Some(&wall)).contains(&f("ior")));
+        assert_eq!(value(f("ior"), &doc, Some(&wall), None), "1.5");
         // The light: emission, two-sided, power.
         let light = picked(&scene, "light");
         assert_eq!(
-            fields(&doc, Some(&light)),
-            vec![
-                Field::Object(0),
-                Field::Object(1),
-                Field::Object(3),
-                Field::Object(4),
-                Field::Power
-            ]
+            shown(&doc, &light),
+            ["material", "colour", "emission", "two-sided", "power"]
         );
-        assert_eq!(value(Field::Object(1), &doc, Some(&light), None), "0");
+        assert_eq!(value(f("color"), &doc, Some(&light), None), "0");
         assert!(fields(&doc, None).is_empty(), "no environment");
+    }
+
+    /// Stepping the material shows the new one's keys with the loader's defaults and drops the
+    /// keys it does not take, so every step loads; a metal is typed by name, `none` removes it.
+    #[test]
+    fn each_material_shows_its_keys_and_a_step_drops_the_others() {
+        let (mut doc, scene) = cornell();
+        let wall = picked(&scene, "left (red)");
+        let step = |doc: &mut SceneDoc| apply(doc, cycle(f("material"), doc, &wall).unwrap());
+        let set = |doc: &mut SceneDoc, key: &str, text: &str| {
+            apply(doc, commit(f(key), text, doc, Some(&wall), None).unwrap())
+        };
+        let get = |doc: &SceneDoc, key: &str| value(f(key), doc, Some(&wall), None);
+        step(&mut doc);
+        step(&mut doc);
+        assert_eq!(get(&doc, "material"), "glass");
+        set(&mut doc, "ior", "1.7");
+        set(&mut doc, "alpha", "0.2");
+        assert_eq!(
+            shown(&doc, &wall),
+            ["material", "colour", "ior", "alpha", "distrib.", "emission"]
+        );
+        step(&mut doc);
+        assert_eq!(get(&doc, "material"), "conductor");
+        assert!(
+            doc.get(&wall.key("ior")).is_none(),
+            "a conductor takes no ior"
+        );
+        assert_eq!(get(&doc, "alpha"), "0.2");
+        assert_eq!(
+            shown(&doc, &wall),
+            ["material", "colour", "alpha", "distrib.", "metal", "emission"]
+        );
+        assert_eq!(get(&doc, "metal"), "none");
+        set(&mut doc, "metal", "Au");
+        assert_eq!(doc.get(&wall.key("metal")).unwrap().as_str(), Some("Au"));
+        // An unknown metal: the loader's message, at the key.
+        let mut bad = doc.clone();
+        bad.apply(commit(f("metal"), "gold", &doc, Some(&wall), None).unwrap())
+            .unwrap();
+        let e = crate::scene::reload::check_text(&bad.spec, &bad.text()).unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.contains("quad[4].metal") && e.contains("unknown metal `gold`; known: Ag"),
+            "{e}"
+        );
+        let c = cycle(f("distribution"), &doc, &wall).unwrap();
+        apply(&mut doc, c);
+        assert_eq!(get(&doc, "distribution"), "beckmann");
+        step(&mut doc);
+        assert_eq!(get(&doc, "material"), "plastic");
+        assert!(
+            doc.get(&wall.key("metal")).is_none(),
+            "a plastic takes no metal"
+        );
+        assert_eq!(
+            shown(&doc, &wall),
+            ["material", "colour", "ior", "alpha", "distrib.", "specular", "emission"]
+        );
+        assert_eq!(get(&doc, "ior"), DEFAULT_PLASTIC_IOR.to_string());
+        assert_eq!(get(&doc, "specular"), "1");
+        set(&mut doc, "specular", "0.5");
+        step(&mut doc);
+        assert_eq!(get(&doc, "material"), "diffuse");
+        for key in ["alpha", "distribution", "specular"] {
+            assert!(doc.get(&wall.key(key)).is_none(), "{key}");
+        }
+        // Undo takes a step back with the keys it dropped.
+        doc.undo();
+        assert_eq!(get(&doc, "specular"), "0.5");
+        assert_eq!(get(&doc, "alpha"), "0.2");
+    }
+
+    /// Roughness given per direction and a conductor's complex index show as those keys.
+    #[test]
+    fn anisotropic_roughness_and_a_complex_index_show_their_own_keys() {
+        let text = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\n[[sphere]]\n\
+                    center = [0, 0, 0]\nradius = 1\nmaterial = \"conductor\"\n\
+                    alpha_u = 0.1\nalpha_v = 0.3\neta = [0.2, 0.9, 1.1]\nk = [3.9, 2.4, 2.1]\n";
+        let mut doc = SceneDoc::from_text("metal.toml", None, text.into()).unwrap();
+        crate::scene::reload::check_text("metal.toml", text).unwrap();
+        let ball = Picked {
+            object: SceneObject {
+                table: "sphere",
+                index: 0,
+                name: None,
+                first: 0,
+                count: 1,
+            },
+        };
+        assert_eq!(
+            shown(&doc, &ball),
+            ["material", "colour", "alpha u", "alpha v", "distrib.", "eta", "k", "emission"]
+        );
+        assert_eq!(value(f("color"), &doc, Some(&ball), None), "1");
+        let c = commit(f("k"), "[4, 2.5, 2]", &doc, Some(&ball), None).unwrap();
+        apply(&mut doc, c);
+        // A plastic takes neither the index nor roughness per direction: smooth, as the
+        // loader builds it.
+        let c = cycle(f("material"), &doc, &ball).unwrap();
+        apply(&mut doc, c);
+        assert_eq!(
+            shown(&doc, &ball),
+            ["material", "colour", "ior", "alpha", "distrib.", "specular", "emission"]
+        );
+        for key in ["alpha_u", "alpha_v", "eta", "k"] {
+            assert!(doc.get(&ball.key(key)).is_none(), "{key}");
+        }
     }
 
     #[test]
@@ -403,7 +634,7 @@ mod tests {
         .unwrap();
         doc.apply(c).unwrap();
         assert_eq!(
-            value(Field::Object(3), &doc, Some(&light), None),
+            value(f("emission"), &doc, Some(&light), None),
             "[34, 24, 8]"
         );
         assert!(commit(Field::Power, "-1", &doc, Some(&light), Some(&scene)).is_err());
