@@ -96,10 +96,7 @@ pub fn draw_help(frame: &mut Frame, area: Rect) {
             " Enter steps",
             Style::new().bold().underlined(),
         )));
-        let steps = format!(
-            "{}, an object's choices and yes/no keys",
-            Field::cycling()
-        );
+        let steps = format!("{}, an object's choices and yes/no keys", Field::cycling());
         rest.extend(
             wrap_words(&steps, 37)
                 .into_iter()
