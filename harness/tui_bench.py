@@ -14,6 +14,13 @@ Throughput: samples per second of render time, TUI (from its --bench-log) agains
 `ptui render` at the same settings, alternated in one run.
 Latency: time from writing `?` to the pty until the help overlay's bytes arrive, while the
 render keeps both cores busy; p50/p99 over many presses.
+View (`--only view`): key-to-new-image latency in camera mode on cornell at its default size
+(320x240) in a 120x40 pty: single arrow presses at random intervals, and held keys (bursts at
+the 33 ms of a key repeat). Each press's latency is from the input thread reading the key to the
+flush of the first frame showing a picture of that move or a later one (the TUI's --bench-log
+`view` lines); single presses are also timed from the harness's write to the log line showing.
+Reload (`--only reload`): time from rewriting the scene file to the `reloaded` status line
+arriving on the pty.
 """
 import argparse, fcntl, os, pty, re, select, signal, struct, subprocess, sys, tempfile, termios, time, random
 
@@ -152,6 +159,68 @@ def latency(bin, presses, log):
     finish(pid, fd)
     return lat
 
+def log_lines(path, prefix):
+    try:
+        return [float(l.split()[1]) for l in open(path) if l.startswith(prefix + " ")]
+    except OSError:
+        return []
+
+def view(bin, presses, log):
+    """Key-to-new-image latency of camera moves: (single presses, held keys, harness-side)."""
+    pid, fd = spawn([bin, "cornell", "--spp", "1000000", "--bench-log", log], env_for("256"))
+    sink = []
+    read_for(fd, 3, sink)
+    os.write(fd, b"v")
+    read_for(fd, 0.5, sink)
+    left, right = b"\x1b[D", b"\x1b[C"
+    singles, outside = [], []
+    for k in range(presses):
+        seen = len(log_lines(log, "view"))
+        os.write(fd, left if k % 2 == 0 else right)
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 2:
+            read_for(fd, 0.001, sink)
+            if len(log_lines(log, "view")) > seen:
+                outside.append(time.monotonic() - t0)
+                break
+        read_for(fd, 0.3 + random.random() * 0.3, sink)
+    singles = log_lines(log, "view")
+    # Held keys: bursts of 30 repeats 33 ms apart, to the left and back.
+    for burst in range(4):
+        key = left if burst % 2 == 0 else right
+        for _ in range(30):
+            os.write(fd, key)
+            read_for(fd, 0.033, sink)
+        read_for(fd, 1.0, sink)
+    held = log_lines(log, "view")[len(singles):]
+    finish(pid, fd)
+    return singles, held, [x * 1e3 for x in outside]
+
+def reload(bin, edits, tmp):
+    """Milliseconds from rewriting the scene file to the frame that shows the reload flushed
+    (the TUI's --bench-log `reload` line, seen by polling it)."""
+    scene = os.path.join(tmp, "box.toml")
+    log = os.path.join(tmp, "reload.log")
+    base = open(os.path.join(os.path.dirname(__file__), "..", "scenes", "cornell.toml")).read()
+    open(scene, "w").write(base)
+    pid, fd = spawn([bin, scene, "--spp", "1000000", "--bench-log", log], env_for("256"))
+    sink = []
+    read_for(fd, 3, sink)
+    lat = []
+    count = lambda: sum(1 for l in open(log) if l.strip() == "reload")
+    for k in range(edits):
+        seen = count()
+        open(scene, "w").write(base.replace("emission = 12", f"emission = {12 + (k % 2) + 1}"))
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 3:
+            read_for(fd, 0.001, sink)
+            if count() > seen:
+                lat.append(time.monotonic() - t0)
+                break
+        read_for(fd, 0.4 + random.random() * 0.4, sink)
+    finish(pid, fd)
+    return [x * 1e3 for x in lat]
+
 def pct(xs, p):
     xs = sorted(xs)
     return xs[min(len(xs) - 1, int(round(p / 100 * (len(xs) - 1))))]
@@ -162,7 +231,7 @@ def main():
     ap.add_argument("--seconds", type=float, default=30)
     ap.add_argument("--presses", type=int, default=100)
     ap.add_argument("--rounds", type=int, default=2)
-    ap.add_argument("--only", choices=["bandwidth", "throughput", "latency"])
+    ap.add_argument("--only", choices=["bandwidth", "throughput", "latency", "view", "reload"])
     ap.add_argument("--modes", default="truecolor,256",
                     help="bandwidth modes, from truecolor, 256, kitty, sixel")
     ap.add_argument("--ssh", metavar="HOST", help="run the TUI on HOST through ssh -tt")
@@ -195,6 +264,19 @@ def main():
         report_throughput(tui, head, head_nice)
     if a.only in (None, "latency"):
         report_latency(a, tmp)
+    if a.only in (None, "view"):
+        singles, held, outside = view(a.bin, a.presses, os.path.join(tmp, "view.log"))
+        for name, xs in [("single presses (in-process)", singles),
+                         ("single presses (harness write to log line)", outside),
+                         ("held keys (in-process)", held)]:
+            if xs:
+                print(f"key-to-new-image {name}: n {len(xs)}, p50 {pct(xs,50):.1f} ms, "
+                      f"p99 {pct(xs,99):.1f} ms, max {max(xs):.1f} ms")
+    if a.only in (None, "reload"):
+        lat = reload(a.bin, min(a.presses, 40), tmp)
+        if lat:
+            print(f"file-change-to-reloaded: n {len(lat)}, p50 {pct(lat,50):.0f} ms, "
+                  f"p99 {pct(lat,99):.0f} ms, max {max(lat):.0f} ms")
     print(f"load average after: {os.getloadavg()}")
 
 def report_throughput(tui, head, head_nice):

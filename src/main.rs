@@ -35,6 +35,7 @@ fn main() {
                 fps: cli.tui.fps,
                 halfblock: !cli.tui.spaces,
                 graphics: cli.tui.graphics,
+                watch: !cli.tui.no_watch,
                 bench_log: cli.tui.bench_log.clone(),
                 resume,
             })

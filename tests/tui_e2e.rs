@@ -37,6 +37,12 @@ impl Tmux {
         }
     }
 
+    /// Type `text` as it is (no key names).
+    fn literal(&self, text: &str) {
+        let out = self.run(&["send-keys", "-t", SESSION, "-l", text]);
+        assert!(out.status.success(), "send-keys -l {text}: {out:?}");
+    }
+
     fn display(&self, format: &str) -> String {
         let out = self.run(&["display-message", "-p", "-t", SESSION, format]);
         String::from_utf8_lossy(&out.stdout).trim().to_string()
@@ -113,6 +119,12 @@ fn session_sized(name: &str, script: &str, size: (u16, u16)) -> (Tmux, PathBuf) 
     let dir = std::env::temp_dir().join(format!("ptui-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
+    let tmux = in_dir(&dir, name, script, size);
+    (tmux, dir)
+}
+
+/// A detached tmux session of `size` running `script` in `dir`.
+fn in_dir(dir: &Path, name: &str, script: &str, size: (u16, u16)) -> Tmux {
     let tmux = Tmux {
         socket: format!("ptui-{name}-{}", std::process::id()),
     };
@@ -130,7 +142,7 @@ fn session_sized(name: &str, script: &str, size: (u16, u16)) -> (Tmux, PathBuf) 
         script,
     ]);
     assert!(out.status.success(), "tmux new-session: {out:?}");
-    (tmux, dir)
+    tmux
 }
 
 /// The terminal is back to normal: cooked mode (as recorded by `stty -a` after ptui exited),
@@ -232,6 +244,265 @@ fn tui_renders_changes_spp_saves_and_restores_the_terminal() {
     assert_restored(&tmux, &dir);
     let exit = std::fs::read_to_string(dir.join("exit.txt")).unwrap();
     assert_eq!(exit.trim(), "0");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The file the status line says was saved (`saved NAME`).
+fn saved_name(screen: &str) -> String {
+    let line = screen.lines().find(|l| l.contains("saved ")).unwrap();
+    line.split("saved ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .unwrap()
+        .to_string()
+}
+
+/// Send each key on its own, a little apart, as typed (a bare Escape followed at once by a
+/// letter would read as Alt+letter).
+fn typed(tmux: &Tmux, keys: &[&str]) {
+    for k in keys {
+        tmux.keys(&[k]);
+        std::thread::sleep(Duration::from_millis(60));
+    }
+}
+
+/// The built-in scene's file in the repository.
+fn builtin(name: &str) -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml")),
+    )
+    .unwrap()
+}
+
+/// The lines of `a` and `b` that differ (they have as many lines).
+fn changed_lines(a: &str, b: &str) -> Vec<(String, String)> {
+    assert_eq!(a.lines().count(), b.lines().count(), "{b}");
+    a.lines()
+        .zip(b.lines())
+        .filter(|(x, y)| x != y)
+        .map(|(x, y)| (x.to_string(), y.to_string()))
+        .collect()
+}
+
+/// Render `args` headless in `dir` to `out`.
+fn headless(dir: &Path, args: &[&str], out: &str) {
+    let st = Command::new(env!("CARGO_BIN_EXE_ptui"))
+        .current_dir(dir)
+        .arg("render")
+        .args(args)
+        .args(["--quiet", "-o", out])
+        .status()
+        .unwrap();
+    assert!(st.success());
+}
+
+#[test]
+fn camera_moves_and_w_change_the_camera_only_and_the_file_renders_the_same() {
+    if !tmux_available() {
+        return;
+    }
+    let bin = env!("CARGO_BIN_EXE_ptui");
+    let script = format!("'{bin}' cornell --size 64x48 --spp 6 --seed 3 --color 256; sleep 600");
+    let (tmux, dir) = session("camera", &script);
+    tmux.wait_for("render progress", 120, |s| {
+        gauge(s).is_some_and(|(done, _)| done >= 1)
+    });
+    typed(&tmux, &["v"]);
+    tmux.wait_for("camera mode", 30, |s| s.contains("camera mode"));
+    typed(&tmux, &["Left", "Left", "Up", "-", "v", "W"]);
+    let screen = tmux.wait_for("the scene written", 60, |s| {
+        s.contains("wrote cornell.toml")
+    });
+    assert!(
+        screen.contains("camera.position, camera.direction"),
+        "{screen}"
+    );
+    // Only the camera's position and direction changed; comments and the rest are as they were.
+    let written = std::fs::read_to_string(dir.join("cornell.toml")).unwrap();
+    let original = builtin("cornell");
+    let changed = changed_lines(&original, &written);
+    let keys: Vec<&str> = changed
+        .iter()
+        .map(|(a, _)| a.split(' ').next().unwrap())
+        .collect();
+    assert_eq!(keys, vec!["position", "direction"], "{changed:?}");
+    assert!(written.contains("near = 140                  # rays start 140 units along"));
+    // The TUI's render of the moved camera, saved when done, is the image `ptui render` makes of
+    // the written file with the same seed and spp, bit for bit.
+    tmux.wait_for("the render to finish", 120, |s| {
+        gauge(s) == Some((6, 6)) && s.contains(" done")
+    });
+    typed(&tmux, &["e"]);
+    let screen = tmux.wait_for("the save", 60, |s| s.contains("saved "));
+    let tui = std::fs::read(dir.join(saved_name(&screen))).unwrap();
+    headless(
+        &dir,
+        &[
+            "cornell.toml",
+            "--size",
+            "64x48",
+            "--spp",
+            "6",
+            "--seed",
+            "3",
+        ],
+        "ref.exr",
+    );
+    assert!(
+        tui == std::fs::read(dir.join("ref.exr")).unwrap(),
+        "the images differ"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn picking_the_red_wall_and_setting_it_green_changes_that_one_key() {
+    if !tmux_available() {
+        return;
+    }
+    let bin = env!("CARGO_BIN_EXE_ptui");
+    let script = format!("'{bin}' cornell-mesh --size 256x256 --spp 100000 --color 256; sleep 600");
+    let (tmux, dir) = session("pick", &script);
+    tmux.wait_for("render progress", 120, |s| {
+        gauge(s).is_some_and(|(done, _)| done >= 1)
+    });
+    // Zoom in twice and pan to the left edge: the preview's centre is on the red wall.
+    typed(
+        &tmux,
+        &[
+            "+", "+", "h", "h", "h", "h", "h", "h", "h", "h", "h", "h", "o",
+        ],
+    );
+    let screen = tmux.wait_for("the pick", 30, |s| s.contains("picked "));
+    assert!(screen.contains("picked left (red) (quad[4])"), "{screen}");
+    assert!(screen.contains("colour     0.63 0.065 0.05"), "{screen}");
+    // The colour is the field after the material.
+    typed(&tmux, &["Tab", "Enter", "C-u"]);
+    tmux.literal("[0.1, 0.6, 0.1]");
+    typed(&tmux, &["Enter"]);
+    tmux.wait_for("the new colour", 30, |s| {
+        s.contains("colour     0.1 0.6 0.1")
+    });
+    typed(&tmux, &["W"]);
+    let screen = tmux.wait_for("the scene written", 30, |s| s.contains("wrote "));
+    assert!(
+        screen.contains("wrote cornell-mesh.toml: quad[4].color"),
+        "{screen}"
+    );
+    let written = std::fs::read_to_string(dir.join("cornell-mesh.toml")).unwrap();
+    let changed = changed_lines(&builtin("cornell-mesh"), &written);
+    assert_eq!(
+        changed,
+        vec![(
+            "color = [0.63, 0.065, 0.05]".to_string(),
+            "color = [0.1, 0.6, 0.1]".to_string()
+        )]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_scene_edited_in_another_pane_reloads_and_a_broken_one_keeps_the_image() {
+    if !tmux_available() {
+        return;
+    }
+    let bin = env!("CARGO_BIN_EXE_ptui");
+    let dir = std::env::temp_dir().join(format!("ptui-watch-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("box.toml");
+    let src = builtin("cornell");
+    std::fs::write(&file, &src).unwrap();
+    let script = format!("'{bin}' box.toml --size 48x36 --spp 100000 --color 256; sleep 600");
+    let tmux = in_dir(&dir, "watch", &script, (100, 30));
+    tmux.wait_for("render progress", 120, |s| {
+        gauge(s).is_some_and(|(done, _)| done >= 1)
+    });
+    // An editor that writes a new file and renames it over the old one.
+    let save = |text: &str| {
+        let tmp = dir.join(".box.toml.swp");
+        std::fs::write(&tmp, text).unwrap();
+        std::fs::rename(&tmp, &file).unwrap();
+        Instant::now()
+    };
+    let at = save(&src.replace("emission = 12", "emission = 20"));
+    tmux.wait_for("the reload", 30, |s| s.contains("reloaded box.toml"));
+    eprintln!(
+        "reloaded {} ms after the save (screen polled every 100 ms)",
+        at.elapsed().as_millis()
+    );
+    // Broken: the loader's message with the file, line and column; the image stays.
+    std::fs::write(&file, src.replace("radius = 600", "radius = -600")).unwrap();
+    let screen = tmux.wait_for("the error", 30, |s| s.contains("box.toml:69:10: field"));
+    assert!(
+        screen.contains("`sphere[8].radius`: must be > 0, got -600"),
+        "{screen}"
+    );
+    let blocks = screen.matches('▀').count();
+    assert!(
+        blocks > 500,
+        "the preview stays: {blocks} half-blocks\n{screen}"
+    );
+    let spp = gauge(&screen).unwrap().0;
+    tmux.wait_for("the render to go on", 60, |s| {
+        gauge(s).is_some_and(|(done, _)| done > spp)
+    });
+    // Fixed: rendered again, the error gone.
+    save(&src);
+    let screen = tmux.wait_for("the fixed file", 30, |s| s.contains("reloaded box.toml"));
+    assert!(!screen.contains("must be > 0"), "{screen}");
+    drop(tmux);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn sighup_leaves_a_film_that_continues_to_the_uninterrupted_image() {
+    if !tmux_available() {
+        return;
+    }
+    let bin = env!("CARGO_BIN_EXE_ptui");
+    let args = "cornell --size 32x24 --spp 400 --seed 5";
+    let script = format!("sh -c 'echo $$ > pid.txt; exec \"{bin}\" {args} --color 256'");
+    let (tmux, dir) = session("hangup", &script);
+    // Past the adaptive pilot (16 passes), not done.
+    tmux.wait_for("render progress", 120, |s| {
+        gauge(s).is_some_and(|(done, _)| done >= 20)
+    });
+    let pid = std::fs::read_to_string(dir.join("pid.txt")).unwrap();
+    // The terminal goes away as a dropped SSH session's does: the pty closes, SIGHUP.
+    drop(tmux);
+    let proc = PathBuf::from(format!("/proc/{}", pid.trim()));
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while proc.exists() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let films: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "film"))
+        .collect();
+    assert_eq!(films.len(), 1, "{films:?}");
+    let name = films[0].file_name().unwrap().to_str().unwrap().to_string();
+    assert!(
+        name.starts_with("cornell-") && name.contains("spp-"),
+        "{name}"
+    );
+    // `ptui FILM` goes on to 400 spp; its image is that of a render never stopped.
+    let script = format!("'{bin}' {name} --color 256; sleep 600");
+    let tmux = in_dir(&dir, "resume", &script, (100, 30));
+    tmux.wait_for("the render to finish", 120, |s| {
+        gauge(s) == Some((400, 400)) && s.contains(" done")
+    });
+    typed(&tmux, &["e"]);
+    let screen = tmux.wait_for("the save", 60, |s| s.contains("saved "));
+    let resumed = std::fs::read(dir.join(saved_name(&screen))).unwrap();
+    let args: Vec<&str> = args.split(' ').collect();
+    headless(&dir, &args, "ref.exr");
+    assert!(
+        resumed == std::fs::read(dir.join("ref.exr")).unwrap(),
+        "the images differ"
+    );
+    drop(tmux);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -41,6 +41,24 @@ pub fn camera_probe(camera: &Camera, nx: u32, ny: u32) -> Vec<Ray> {
 /// objects are caught by the camera-ray check instead.
 pub const BVH_CROSSOVER: usize = 2;
 
+/// `auto`'s choice for `n` primitives (at least [`BVH_CROSSOVER`]) given their BVH: whether to
+/// keep it (it tests fewer primitives than the flat scan for the `probe` rays), and why.
+pub fn auto_choice(bvh: &Bvh, n: usize, probe: &[Ray]) -> (bool, String) {
+    let cost = bvh.probe_cost(probe);
+    if probe.is_empty() || cost < n as f64 {
+        let why = format!(
+            "auto: {n} >= crossover {BVH_CROSSOVER}; camera rays cost {cost:.1} tests vs {n} flat"
+        );
+        (true, why)
+    } else {
+        let why = format!(
+            "auto: the boxes do not separate the objects; camera rays would cost {cost:.1} \
+             tests vs {n} flat"
+        );
+        (false, why)
+    }
+}
+
 /// Which accelerator the scene asks for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
@@ -88,19 +106,9 @@ impl Accel {
             ),
             AccelChoice::Auto => {
                 let bvh = bvh();
-                let cost = bvh.probe_cost(probe);
-                if probe.is_empty() || cost < n as f64 {
-                    let why = format!(
-                        "auto: {n} >= crossover {BVH_CROSSOVER}; camera rays cost {cost:.1} \
-                         tests vs {n} flat"
-                    );
-                    (Accel::Bvh(bvh), why)
-                } else {
-                    let why = format!(
-                        "auto: the boxes do not separate the objects; camera rays would cost \
-                         {cost:.1} tests vs {n} flat"
-                    );
-                    (Accel::Flat(flat::FlatScan::new(prims)), why)
+                match auto_choice(&bvh, n, probe) {
+                    (true, why) => (Accel::Bvh(bvh), why),
+                    (false, why) => (Accel::Flat(flat::FlatScan::new(prims)), why),
                 }
             }
         }

@@ -20,6 +20,9 @@ pub struct TuiArgs {
     /// if it does not answer in 200 ms, e.g. inside tmux).
     #[arg(long, value_enum, default_value_t = GraphicsChoice::Auto)]
     pub graphics: GraphicsChoice,
+    /// Do not watch the scene file (and the meshes and map it reads) for changes on disk.
+    #[arg(long)]
+    pub no_watch: bool,
     /// Measuring harness: log terminal bytes per second and key latencies to this file.
     #[arg(long, hide = true)]
     pub bench_log: Option<PathBuf>,

@@ -43,6 +43,13 @@ impl Shape {
             Shape::Triangle(t) => t.bounds(),
         }
     }
+
+    pub fn area(&self) -> f64 {
+        match self {
+            Shape::Sphere(s) => s.area(),
+            Shape::Triangle(t) => t.area(),
+        }
+    }
 }
 
 /// A shape with its material and, if it emits, its index in [`Lights`].

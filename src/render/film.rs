@@ -29,6 +29,9 @@ use std::sync::Arc;
 pub struct MeanImage {
     width: u32,
     height: u32,
+    /// Film pixels per stored pixel along each axis: 1 for a film's image; B for a coarse
+    /// preview holding one value per B x B block (see `render::preview`).
+    block: u32,
     px: Box<[[AtomicU64; 3]]>,
 }
 
@@ -38,7 +41,30 @@ impl MeanImage {
         MeanImage {
             width,
             height,
+            block: 1,
             px: zeroed(n),
+        }
+    }
+
+    /// A `width` x `height` image whose B x B blocks of pixels each show one pixel of `coarse`
+    /// (B = `block`; `coarse` is at least ceil(width / B) x ceil(height / B)).
+    pub fn blocks(width: u32, height: u32, block: u32, coarse: &MeanImage) -> Self {
+        let (cw, ch) = (width.div_ceil(block), height.div_ceil(block));
+        assert!(coarse.width >= cw && coarse.height >= ch && coarse.block == 1);
+        let px = zeroed(cw as usize * ch as usize);
+        for y in 0..ch as usize {
+            for x in 0..cw as usize {
+                let v = coarse.get(y * coarse.width as usize + x);
+                for (c, v) in px[y * cw as usize + x].iter().zip(v) {
+                    c.store(v.to_bits(), Ordering::Relaxed);
+                }
+            }
+        }
+        MeanImage {
+            width,
+            height,
+            block,
+            px,
         }
     }
 
@@ -62,13 +88,24 @@ impl MeanImage {
     }
 
     pub fn pixels(&self) -> usize {
-        self.px.len()
+        self.width as usize * self.height as usize
+    }
+
+    /// Film pixels per stored value along each axis (1 but for a coarse preview).
+    pub fn block(&self) -> u32 {
+        self.block
     }
 
     /// Pixel i's mean (row-major, row 0 at the top).
     #[inline]
     pub fn get(&self, i: usize) -> [f64; 3] {
-        self.px[i]
+        let at = if self.block == 1 {
+            i
+        } else {
+            let (w, b) = (self.width as usize, self.block as usize);
+            (i / w / b) * w.div_ceil(b) + (i % w) / b
+        };
+        self.px[at]
             .each_ref()
             .map(|c| f64::from_bits(c.load(Ordering::Relaxed)))
     }

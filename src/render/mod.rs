@@ -9,6 +9,7 @@
 pub mod adaptive;
 pub mod film;
 mod lookahead;
+pub mod preview;
 mod renderer;
 mod rows;
 mod schedule;

@@ -10,7 +10,7 @@ use crate::geometry::Primitive;
 use crate::math::{DVec3, Ray};
 
 /// Default vertical field of view, degrees.
-const DEFAULT_VFOV: f64 = 40.0;
+pub const DEFAULT_VFOV: f64 = 40.0;
 
 pub(super) fn build_camera(desc: &SceneDesc, src: &str, file: &str) -> Result<Camera, SceneError> {
     let c = &desc.camera;

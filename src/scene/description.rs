@@ -113,7 +113,21 @@ pub enum MaterialName {
 }
 
 impl MaterialName {
-    pub fn as_str(self) -> &'static str {
+    pub const ALL: [MaterialName; 6] = [
+        MaterialName::Diffuse,
+        MaterialName::Mirror,
+        MaterialName::Glass,
+        MaterialName::Conductor,
+        MaterialName::Plastic,
+        MaterialName::MetallicRoughness,
+    ];
+
+    /// The material a scene file names `name`.
+    pub fn from_name(name: &str) -> Option<MaterialName> {
+        MaterialName::ALL.into_iter().find(|m| m.as_str() == name)
+    }
+
+    pub const fn as_str(self) -> &'static str {
         match self {
             MaterialName::Diffuse => "diffuse",
             MaterialName::Mirror => "mirror",

@@ -6,10 +6,11 @@ use super::description::{MaterialDesc, MeshDesc, SceneDesc};
 use super::materials::build_material_with;
 use super::mesh::{self, Transform};
 use super::mesh_triangle_room;
-use super::sky::build_sky;
+use super::reload::choose_accel;
+use super::sky::{build_sky, BUILTIN_SKY};
 use super::textures::{MaterialTextures, SceneTextures, TextureLoader};
-use super::{builtin, BuildReport, Scene, SceneError};
-use crate::accel::{camera_probe, Accel, AccelChoice};
+use super::{builtin, BuildReport, Scene, SceneError, SceneObject};
+use crate::accel::AccelChoice;
 use crate::geometry::torus_knot::TorusKnot;
 use crate::geometry::{Primitive, Shape};
 use crate::geometry::{Sphere, Triangle};
@@ -18,7 +19,6 @@ use crate::light::{sphere::SphereLight, triangle::TriangleLight, Light, Lights};
 use crate::material::Material;
 use crate::math::DVec3;
 use crate::progress::Progress;
-use crate::settings::RenderSettings;
 use std::collections::HashSet;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -50,7 +50,7 @@ pub fn load_with(spec: &str, options: &BuildOptions) -> Result<Scene, SceneError
     let path = Path::new(spec);
     // A model is named in the scene made for it and read again there: a file, not a pipe.
     if path.is_file() && super::model::is_model(path) {
-        return load_model(path, spec, options);
+        return load_text(spec, &model_text(path, spec)?, options);
     }
     match scene_text(spec)? {
         SceneText::Read { text, base_dir } => {
@@ -103,28 +103,58 @@ pub fn scene_text(spec: &str) -> Result<SceneText, SceneError> {
     }
 }
 
-/// A bare model (OBJ, glTF) as the scene `scene::model` makes for it.
-fn load_model(path: &Path, spec: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
+/// The scene `scene::model` makes for the bare model at `path` (OBJ, glTF), naming the model by
+/// its file name (the scene's paths start from the model's folder).
+fn model_text(path: &Path, spec: &str) -> Result<String, SceneError> {
     let name = path
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let src = super::model::scene_text(path, &name).map_err(|msg| {
+    super::model::scene_text(path, &name).map_err(|msg| {
         let own = format!("{}: ", path.display());
         let msg = msg.strip_prefix(&own).unwrap_or(&msg).to_string();
         SceneError::at(spec, "", None, None, msg)
-    })?;
+    })
+}
+
+/// The text of the scene `spec` names, read as [`scene_text`] reads it, and the file's path
+/// (None for a built-in scene or standard input).
+pub fn read_source(spec: &str) -> Result<(String, Option<PathBuf>), SceneError> {
+    let path = Path::new(spec);
+    if path.is_file() && super::model::is_model(path) {
+        // A bare model: the scene made for it, as a built-in's text is (written back, it goes
+        // beside the model as `<model>.toml`, naming the model relative to itself).
+        return Ok((model_text(path, spec)?, None));
+    }
+    Ok(match scene_text(spec)? {
+        SceneText::Read { text, base_dir } => {
+            (text, base_dir.is_some().then(|| PathBuf::from(spec)))
+        }
+        SceneText::Builtin(src) => (src.to_string(), None),
+    })
+}
+
+/// Build the scene `spec` names from `src`, its text (as read, or as edited in the TUI): paths
+/// in it are relative to the folder of the file `spec` names, if it names one.
+pub fn load_text(spec: &str, src: &str, options: &BuildOptions) -> Result<Scene, SceneError> {
     let options = BuildOptions {
-        base_dir: Some(path.parent().map_or_else(PathBuf::new, Path::to_path_buf)),
+        base_dir: base_dir(spec).or_else(|| options.base_dir.clone()),
         ..options.clone()
     };
-    let mut scene = load_str_with(&src, spec, &options)?;
-    if src.contains("builtin:sky") {
+    let mut scene = load_str_with(src, spec, &options)?;
+    if super::model::is_model(Path::new(spec)) && src.contains(BUILTIN_SKY) {
         scene.report.warnings.push(format!(
             "{spec} has no emitters: lit by the built-in sky (`ptui scene --from {spec} -o \
              scene.toml` writes the scene to edit)"
         ));
     }
     Ok(scene)
+}
+
+/// The folder relative paths in the scene file `spec` start from (None for a built-in).
+pub fn base_dir(spec: &str) -> Option<PathBuf> {
+    let path = Path::new(spec);
+    path.is_file()
+        .then(|| path.parent().map_or_else(PathBuf::new, Path::to_path_buf))
 }
 
 /// Parse and build a scene from TOML text; `file` names it in errors.
@@ -178,9 +208,27 @@ struct Builder<'a> {
     /// is flat.
     shading: Vec<[[f32; 3]; 3]>,
     warnings: Vec<String>,
+    objects: Vec<SceneObject>,
 }
 
 impl Builder<'_> {
+    /// Record that object `index` of `table` became the primitives from `first` on.
+    fn object(
+        &mut self,
+        table: &'static str,
+        index: usize,
+        name: &Option<Spanned<String>>,
+        first: usize,
+    ) {
+        self.objects.push(SceneObject {
+            table,
+            index,
+            name: name.as_ref().map(|n| n.get_ref().clone()),
+            first: first as u32,
+            count: (self.prims.len() - first) as u32,
+        });
+    }
+
     fn err(&self, span: Option<Range<usize>>, field: String, msg: impl Into<String>) -> SceneError {
         SceneError::at(self.file, self.src, span, Some(field), msg)
     }
@@ -300,13 +348,16 @@ fn build(
         mesh_triangles: 0,
         shading: Vec::new(),
         warnings: Vec::new(),
+        objects: Vec::new(),
     };
     for (i, s) in desc.sphere.iter().enumerate() {
         let object = format!("sphere[{i}]");
         b.name(&s.name, &object)?;
         let material = b.material(&s.material(), &object, false)?;
         let sphere = Sphere::new(DVec3::from_array(s.center.0), s.radius.0);
+        let first = b.prims.len();
         b.add([(Shape::Sphere(sphere), None)], material);
+        b.object("sphere", i, &s.name, first);
     }
     for (i, t) in desc.triangle.iter().enumerate() {
         let object = format!("triangle[{i}]");
@@ -321,7 +372,9 @@ fn build(
             ));
         }
         let material = b.material(&t.material(), &object, true)?;
+        let first = b.prims.len();
         b.add([(Shape::Triangle(tri), None)], material);
+        b.object("triangle", i, &t.name, first);
     }
     for (i, q) in desc.quad.iter().enumerate() {
         let object = format!("quad[{i}]");
@@ -349,7 +402,9 @@ fn build(
                 .then_some(QUAD_UVS[k])
         };
         let shapes = [(Shape::Triangle(t1), uv(0)), (Shape::Triangle(t2), uv(1))];
+        let first = b.prims.len();
         b.add(shapes, material);
+        b.object("quad", i, &q.name, first);
     }
     for (i, m) in desc.mesh.iter().enumerate() {
         let object = format!("mesh[{i}]");
@@ -398,6 +453,7 @@ fn build(
             };
             b.add([(Shape::Triangle(t), uv)], material);
         }
+        b.object("mesh", i, &m.name, first);
         if mesh.normals.iter().any(Option::is_some) {
             b.shading.resize(first, [[0.0; 3]; 3]);
             b.shading
@@ -417,6 +473,7 @@ fn build(
         lights,
         mut shading,
         warnings,
+        objects,
         ..
     } = b;
     if !shading.is_empty() {
@@ -426,21 +483,14 @@ fn build(
         if !uvs.is_empty() {
             uvs.resize(prims.len(), None);
         }
-        let t = SceneTextures {
+        Arc::new(SceneTextures {
             materials: material_textures,
             uvs,
             images: loader.cache.len(),
             bytes: loader.cache.bytes,
-        };
-        Box::new(t)
+        })
     });
-    let choice = options.accel.or(desc.accel).unwrap_or_default();
-    // Probe with the camera's rays at the image's aspect ratio: 32 rows are plenty to tell
-    // boxes that separate the objects from boxes that do not, at a cost of microseconds.
-    let size = RenderSettings::merged(&[&desc.render]);
-    let nx = ((32 * size.width) / size.height.max(1)).clamp(1, 128);
-    let probe = camera_probe(&camera, nx, 32);
-    let (accel, why) = Accel::build(choice, &prims, &probe, options.progress.as_deref());
+    let (accel, accel_text) = choose_accel(desc, &camera, &prims, options, None);
     let camera = focus_camera(camera, desc, &accel, &prims, src, file)?;
     let lights = Lights::new(clip_sphere_lights(lights, &prims));
     let no_emitters = lights.is_empty();
@@ -468,7 +518,7 @@ fn build(
     }
     let report = BuildReport {
         materials: materials_text,
-        accel: format!("{} ({why})", accel.describe(prims.len())),
+        accel: accel_text,
         light_sampling,
         environment: sky.text,
         build_time: started.elapsed(),
@@ -477,11 +527,12 @@ fn build(
     Ok(Scene {
         name: file.to_string(),
         camera,
-        prims,
+        prims: prims.into(),
         materials,
         lights,
         accel,
-        shading,
+        shading: shading.into(),
+        objects,
         textures,
         files,
         background: sky.background,
@@ -777,7 +828,7 @@ fn sidedness(lights: &Lights) -> String {
 /// A `[render]` size whose film cannot fit in the available memory is an error of the scene file,
 /// reported at its `width` (or `height`) with the memory it would need. Every other setting was
 /// range-checked as it was read.
-fn check_render_size(desc: &SceneDesc, src: &str, file: &str) -> Result<(), SceneError> {
+pub(super) fn check_render_size(desc: &SceneDesc, src: &str, file: &str) -> Result<(), SceneError> {
     let r = &desc.render;
     if r.width.is_none() && r.height.is_none() {
         return Ok(());

@@ -39,6 +39,38 @@ pub const DEFAULT_PLASTIC_IOR: f64 = 1.49;
 /// `index-matched` extreme scene.)
 pub const INDEX_MATCHED: f64 = 1e-6;
 
+/// The material keys that apply to some materials only, with those materials (the loader
+/// refuses them on any other; the TUI drops them when it steps an object to another material).
+/// `material`, `color`, `emission` and `two_sided` apply to all.
+pub const KEY_MATERIALS: &[(&str, &[MaterialName])] = {
+    use MaterialName::*;
+    &[
+        ("ior", &[Glass, Plastic, MetallicRoughness]),
+        ("alpha", &[Glass, Conductor, Plastic, MetallicRoughness]),
+        ("alpha_u", &[Glass, Conductor]),
+        ("alpha_v", &[Glass, Conductor]),
+        ("distribution", &[Glass, Conductor, Plastic]),
+        ("eta", &[Conductor]),
+        ("k", &[Conductor]),
+        ("metal", &[Conductor]),
+        ("specular", &[Plastic, MetallicRoughness]),
+        ("metallic", &[MetallicRoughness]),
+    ]
+};
+
+/// The materials `key` applies to: those [`KEY_MATERIALS`] lists, or all.
+fn materials_of(key: &str) -> &'static [MaterialName] {
+    KEY_MATERIALS
+        .iter()
+        .find(|(k, _)| *k == key)
+        .map_or(&MaterialName::ALL, |(_, kinds)| kinds)
+}
+
+/// Whether an object of material `kind` may set `key`.
+pub fn applies(key: &str, kind: MaterialName) -> bool {
+    materials_of(key).contains(&kind)
+}
+
 /// Where an object's material keys are read from, for errors.
 struct At<'a> {
     src: &'a str,
@@ -57,14 +89,14 @@ impl At<'_> {
         )
     }
 
-    /// `key` (if given) must belong to one of `kinds`.
+    /// `key` (if given) must be one [`applies`] to `kind`.
     fn only<T>(
         &self,
         value: &Option<Spanned<T>>,
         key: &str,
         kind: MaterialName,
-        kinds: &[MaterialName],
     ) -> Result<(), SceneError> {
+        let kinds = materials_of(key);
         match value {
             Some(v) if !kinds.contains(&kind) => {
                 let names: Vec<String> = kinds
@@ -140,43 +172,23 @@ pub fn build_material_with(
         }
     };
     textures.color = tex;
-    at.only(
-        &m.ior,
-        "ior",
-        kind_name,
-        &[Glass, Plastic, MetallicRoughness],
-    )?;
-    at.only(
-        &m.alpha,
-        "alpha",
-        kind_name,
-        &[Glass, Conductor, Plastic, MetallicRoughness],
-    )?;
-    at.only(&m.alpha_u, "alpha_u", kind_name, &[Glass, Conductor])?;
-    at.only(&m.alpha_v, "alpha_v", kind_name, &[Glass, Conductor])?;
-    at.only(
-        &m.distribution,
-        "distribution",
-        kind_name,
-        &[Glass, Conductor, Plastic],
-    )?;
-    at.only(&m.eta, "eta", kind_name, &[Conductor])?;
-    at.only(&m.k, "k", kind_name, &[Conductor])?;
-    at.only(&m.metal, "metal", kind_name, &[Conductor])?;
-    at.only(
-        &m.specular,
-        "specular",
-        kind_name,
-        &[Plastic, MetallicRoughness],
-    )?;
-    at.only(&m.metallic, "metallic", kind_name, &[MetallicRoughness])?;
+    at.only(&m.ior, "ior", kind_name)?;
+    at.only(&m.alpha, "alpha", kind_name)?;
+    at.only(&m.alpha_u, "alpha_u", kind_name)?;
+    at.only(&m.alpha_v, "alpha_v", kind_name)?;
+    at.only(&m.distribution, "distribution", kind_name)?;
+    at.only(&m.eta, "eta", kind_name)?;
+    at.only(&m.k, "k", kind_name)?;
+    at.only(&m.metal, "metal", kind_name)?;
+    at.only(&m.specular, "specular", kind_name)?;
+    at.only(&m.metallic, "metallic", kind_name)?;
     if let Some(a) = &m.alpha {
         if let Textured::Texture(desc) = a.get_ref() {
             if kind_name == Plastic {
                 return Err(at.err(
                     a.span(),
                     "alpha",
-                    "a plastic's `alpha` cannot be a texture: its coat's tables are computed for                      one alpha when the scene is built",
+                    "a plastic's `alpha` cannot be a texture: its coat's tables are computed for one alpha when the scene is built",
                 ));
             }
             let err = |span, sub: &str, msg| err(span, &sub_key("alpha", sub), msg);

@@ -5,6 +5,7 @@ pub mod builtin;
 mod camera;
 pub mod check;
 pub mod description;
+pub mod edit;
 pub mod error;
 pub mod gltf;
 pub mod gltf_material;
@@ -15,6 +16,7 @@ pub mod mesh;
 pub mod model;
 pub mod mtl;
 pub mod obj;
+pub mod reload;
 mod sky;
 pub mod textures;
 
@@ -27,10 +29,12 @@ use crate::light::Lights;
 use crate::material::Material;
 use crate::math::{DVec3, Ray};
 use crate::settings::SettingsOverrides;
+use std::sync::Arc;
 use std::time::Duration;
 
+pub use camera::DEFAULT_VFOV;
 pub use error::SceneError;
-pub use load::{load, load_str, load_str_with, load_with, BuildOptions};
+pub use load::{load, load_str, load_str_with, load_text, load_with, BuildOptions};
 
 /// Most triangles all meshes of one scene may hold together, whatever the memory: the BVH
 /// indexes nodes and primitives with u32, and a tree has fewer than two nodes per primitive.
@@ -92,24 +96,55 @@ impl std::fmt::Display for BuildReport {
     }
 }
 
+/// One object of the scene file (a `[[sphere]]`, `[[triangle]]`, `[[quad]]` or `[[mesh]]`
+/// table) and the primitives it became.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneObject {
+    /// The array of tables it is in: `sphere`, `triangle`, `quad` or `mesh`.
+    pub table: &'static str,
+    /// Its place in that array.
+    pub index: usize,
+    pub name: Option<String>,
+    /// Its primitives: `prims[first..first + count]`.
+    pub first: u32,
+    pub count: u32,
+}
+
+impl SceneObject {
+    /// The loader's name for it: `quad[4]`.
+    pub fn path(&self) -> String {
+        format!("{}[{}]", self.table, self.index)
+    }
+
+    /// Its name, else its path.
+    pub fn label(&self) -> String {
+        self.name.clone().unwrap_or_else(|| self.path())
+    }
+}
+
+/// The built scene. Its geometry (primitives, accelerator, shading normals) is shared between
+/// scenes that differ only in their camera, so a camera move builds a new scene in microseconds
+/// whatever the meshes.
 #[derive(Clone, Debug)]
 pub struct Scene {
     /// Built-in name or file path, for messages and output file names.
     pub name: String,
     pub camera: Camera,
-    pub prims: Vec<Primitive>,
+    pub prims: Arc<[Primitive]>,
     pub materials: Vec<Material>,
     pub lights: Lights,
-    pub accel: Accel,
+    pub accel: Arc<Accel>,
     /// Per primitive, the shading normals of its three corners (all zero: flat); empty when
     /// the scene has no smooth-shaded mesh, so flat scenes pay one bounds check per hit.
-    pub shading: Vec<[[f32; 3]; 3]>,
+    pub shading: Arc<[[[f32; 3]; 3]]>,
+    /// The scene file's objects in the order their primitives were built.
+    pub objects: Vec<SceneObject>,
     /// The textured materials and the primitives' texture coordinates; `None` without
-    /// textures, so untextured scenes pay one test per vertex (`Scene::material_at`).
-    pub textures: Option<Box<textures::SceneTextures>>,
+    /// textures, so untextured scenes pay one test per vertex (`Scene::material_at`). Shared,
+    /// like the geometry, by scenes that differ only in their camera.
+    pub textures: Option<Arc<textures::SceneTextures>>,
     /// Every file the build read besides the scene file (meshes, material libraries, glTF
-    /// buffers, textures), in the order read: what a change of the scene is watched and
-    /// hashed by.
+    /// buffers, textures), in the order read: what a change of the scene is watched by.
     pub files: Vec<std::path::PathBuf>,
     /// Radiance of the constant sky (black without one); unused when `environment` is set.
     pub background: DVec3,
@@ -224,6 +259,20 @@ impl Scene {
             Some(env) => env.le(d),
             None => self.background,
         }
+    }
+
+    /// The object primitive `prim` belongs to.
+    pub fn object_of(&self, prim: u32) -> Option<&SceneObject> {
+        let i = self.objects.partition_point(|o| o.first <= prim);
+        let o = self.objects.get(i.checked_sub(1)?)?;
+        (prim < o.first + o.count).then_some(o)
+    }
+
+    /// The object the pinhole ray through film position (`fx`, `fy`) hits first.
+    pub fn object_at(&self, width: u32, height: u32, fx: f64, fy: f64) -> Option<&SceneObject> {
+        let ray = self.camera.ray(width, height, fx, fy);
+        let prim = self.accel.closest_prim(&self.prims, &ray, f64::INFINITY)?;
+        self.object_of(prim)
     }
 
     pub fn bounds(&self) -> Aabb {

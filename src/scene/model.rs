@@ -36,7 +36,7 @@ pub fn scene_text(path: &Path, written: &str) -> Result<String, String> {
             c.position,
             c.position + c.forward,
             c.vfov_degrees,
-            "the model's own camera",
+            "taken from the model",
         ),
         None => {
             let centre = (o.min + o.max) * 0.5;

@@ -9,14 +9,18 @@
 //! its threads are joined (`install` returns only when every task has), and the worker takes the
 //! newest command.
 
+mod film;
 pub mod panics;
+mod source;
 
-use crate::io::film_file::{self, FilmHeader};
 use crate::progress::Progress;
 use crate::render::film::{ErrorEstimate, MeanImage};
-use crate::render::{PassOutcome, RenderError, RenderStats, Renderer};
-use crate::scene::{self, BuildOptions, Scene};
+use crate::render::preview::{coarse_pass, preview_blocks};
+use crate::render::{build_pool, PassOutcome, RenderError, RenderStats, Renderer};
+use crate::scene::{BuildOptions, Scene};
 use crate::settings::{RenderSettings, SettingsOverrides};
+use source::Built;
+pub use source::SceneSource;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender};
@@ -30,12 +34,12 @@ const RENDER_NICE: i32 = 10;
 /// How often a scene load's progress is sent: a few times a second is enough for a gauge.
 const LOAD_POLL: Duration = Duration::from_millis(150);
 
-/// What to render: a scene (file or built-in name) and the settings layers above the scene's
-/// own `[render]` table (see [`RenderSettings::resolve`]).
+/// What to render: a scene (file or built-in name, possibly edited) and the settings layers
+/// above the scene's own `[render]` table (see [`RenderSettings::resolve`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Request {
     pub id: u64,
-    pub scene: String,
+    pub scene: SceneSource,
     pub cli: SettingsOverrides,
     pub form: SettingsOverrides,
     /// Start a new film even if the current one could go on.
@@ -75,12 +79,22 @@ pub struct Snapshot {
     /// saves read it whenever they need to. A copy per snapshot cost 12 bytes per pixel, 24
     /// while one replaced another: 200 MB at 3840x2160.
     pub image: Arc<MeanImage>,
+    /// A coarse preview of the render (see `render::preview`), shown instead of `image` until
+    /// the film has a complete pass; never part of the film.
+    pub preview: Option<Arc<MeanImage>>,
     pub stats: RenderStats,
     pub error: ErrorEstimate,
     pub target_spp: u32,
     /// Mean samples per pixel in a pass from now on (1 until an adaptive map is built).
     pub samples_per_pass: f64,
     pub status: JobStatus,
+}
+
+impl Snapshot {
+    /// The image to show: the coarse preview while there is one, else the film's.
+    pub fn picture(&self) -> &Arc<MeanImage> {
+        self.preview.as_ref().unwrap_or(&self.image)
+    }
 }
 
 // A few hundred bytes per event, a few events per second: boxing would buy nothing.
@@ -202,6 +216,7 @@ impl SessionHandle {
             cancel: cancel.clone(),
             min_interval,
             pool: None,
+            preview_pool: None,
             scene: None,
             job: None,
             next_job: 1,
@@ -224,10 +239,13 @@ impl SessionHandle {
 
     /// Queue a command and interrupt the running pass so it is taken promptly.
     pub fn send(&self, cmd: Command) {
-        // Send first, then cancel: the worker clears the flag before draining the queue, so a
-        // command is never left waiting behind a full pass.
-        let _ = self.tx.send(cmd);
+        // Raise the flag, then send. The worker clears the flag only after draining the queue,
+        // and waits for the command when it sees the flag with nothing queued, so a command is
+        // never left behind a full batch, and a flag never outlives its command: raised after
+        // the worker had taken the command, it cut the next render's first pass short (a pass
+        // number used, its samples missing: a film not the image of an uninterrupted render).
         self.cancel.store(true, Ordering::SeqCst);
+        let _ = self.tx.send(cmd);
     }
 
     /// Stop the render and join the worker.
@@ -244,6 +262,10 @@ struct Job {
     renderer: Renderer,
     status: JobStatus,
     last_sent: Option<Instant>,
+    /// The block sizes of the coarse preview passes still to run before the film's first pass.
+    blocks: Vec<u32>,
+    /// The last coarse preview, until the film has a complete pass.
+    preview: Option<Arc<MeanImage>>,
 }
 
 struct Worker {
@@ -253,7 +275,11 @@ struct Worker {
     min_interval: Duration,
     /// The pool and the thread count it was built for (0 = one per core).
     pool: Option<(usize, Arc<rayon::ThreadPool>)>,
-    scene: Option<(String, Arc<Scene>)>,
+    /// The coarse preview passes' pool, at the UI's priority: they are what the user waits
+    /// for after a camera move (a few milliseconds), and at nice 10 on a busy machine they
+    /// waited for everything else.
+    preview_pool: Option<(usize, Arc<rayon::ThreadPool>)>,
+    scene: Option<Built>,
     job: Option<Job>,
     next_job: u64,
 }
@@ -291,18 +317,25 @@ impl Worker {
                 .job
                 .as_ref()
                 .is_some_and(|j| j.status == JobStatus::Running);
+            let mut commands = Vec::new();
             if !running {
                 match self.rx.recv() {
-                    Ok(cmd) => {
-                        if !self.guarded(|w| w.handle(cmd)) {
-                            return;
-                        }
-                    }
+                    Ok(cmd) => commands.push(cmd),
                     Err(_) => return,
                 }
             }
+            let raised = self.cancel.load(Ordering::SeqCst);
+            commands.extend(self.rx.try_iter());
+            if raised && commands.is_empty() {
+                // The flag goes up just before its command is sent: it is on its way.
+                match self.rx.recv() {
+                    Ok(cmd) => commands.push(cmd),
+                    Err(_) => return,
+                }
+                commands.extend(self.rx.try_iter());
+            }
             self.cancel.store(false, Ordering::SeqCst);
-            while let Ok(cmd) = self.rx.try_recv() {
+            for cmd in newest_start_only(commands) {
                 if !self.guarded(|w| w.handle(cmd)) {
                     return;
                 }
@@ -371,41 +404,52 @@ impl Worker {
         true
     }
 
-    /// `scene::load_with` on a thread of its own, its progress sent as `Loading` events every
-    /// [`LOAD_POLL`] meanwhile (the sink is this thread's).
-    fn load_scene(&self, spec: &str) -> Result<Scene, scene::SceneError> {
+    /// `build` (a scene's load, given the build options to report its progress in) on a thread
+    /// of its own, its progress sent as `Loading` events every [`LOAD_POLL`] meanwhile (the sink
+    /// is this thread's).
+    fn with_load_progress<T: Send>(&self, build: impl FnOnce(&BuildOptions) -> T + Send) -> T {
         let progress = Arc::new(Progress::default());
         let options = BuildOptions {
             progress: Some(progress.clone()),
             ..Default::default()
         };
         std::thread::scope(|s| {
-            let load = s.spawn(|| scene::load_with(spec, &options));
-            while !load.is_finished() {
-                std::thread::sleep(LOAD_POLL);
-                let (stage, total, done) = progress.snapshot();
-                if !stage.is_empty() && !load.is_finished() {
-                    self.send(SessionEvent::Loading { stage, total, done });
+            let (tx, rx) = mpsc::channel();
+            let load = s.spawn(move || {
+                let _ = tx.send(build(&options));
+            });
+            // The result as soon as it is there (a camera move's build takes microseconds);
+            // the progress every LOAD_POLL until then.
+            loop {
+                match rx.recv_timeout(LOAD_POLL) {
+                    Ok(built) => return built,
+                    Err(mpsc::RecvTimeoutError::Timeout) => {
+                        let (stage, total, done) = progress.snapshot();
+                        if !stage.is_empty() {
+                            self.send(SessionEvent::Loading { stage, total, done });
+                        }
+                    }
+                    // The build panicked: its panic goes on here.
+                    Err(mpsc::RecvTimeoutError::Disconnected) => {
+                        let panic = load.join().err();
+                        std::panic::resume_unwind(panic.unwrap_or_else(|| Box::new("scene build")))
+                    }
                 }
             }
-            load.join()
-                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
         })
     }
 
     /// Load the scene if it changed, merge the settings, and either go on with the current film
     /// (only the stopping rule or display settings changed) or start a new one.
     fn start(&mut self, req: &Request) -> Result<(), String> {
-        let scene = match &self.scene {
-            Some((spec, s)) if *spec == req.scene => s.clone(),
-            _ => {
-                let s = Arc::new(self.load_scene(&req.scene).map_err(|e| e.to_string())?);
-                self.scene = Some((req.scene.clone(), s.clone()));
-                s
-            }
-        };
+        let built = self.with_load_progress(|options| {
+            Built::scene_for(self.scene.as_ref(), &req.scene, options)
+        })?;
+        let scene = built.scene.clone();
         let settings = RenderSettings::resolve(&scene.render, &req.cli, Some(&req.form));
         settings.validate()?;
+        // Kept only once the request is accepted: a failed one leaves the last good scene.
+        let built = Some(built);
 
         let continues = !req.fresh
             && self.job.as_ref().is_some_and(|j| {
@@ -429,6 +473,14 @@ impl Worker {
                     p
                 }
             };
+            if self
+                .preview_pool
+                .as_ref()
+                .is_none_or(|(n, _)| *n != settings.threads)
+            {
+                let p = build_pool(settings.threads).map_err(|e| e.to_string())?;
+                self.preview_pool = Some((settings.threads, p));
+            }
             let renderer = Renderer::with_pool(scene.clone(), settings.clone(), pool)
                 .map_err(|e| e.to_string())?;
             self.job = Some(Job {
@@ -436,9 +488,12 @@ impl Worker {
                 renderer,
                 status: JobStatus::Running,
                 last_sent: None,
+                blocks: preview_blocks(settings.width, settings.height),
+                preview: None,
             });
             self.next_job += 1;
         }
+        self.scene = built;
         let job = self.job.as_ref().expect("set above");
         self.send(SessionEvent::Started {
             request: req.id,
@@ -491,11 +546,32 @@ impl Worker {
         }
     }
 
-    /// One batch of passes, then a snapshot if one is due.
+    /// One batch of passes, then a snapshot if one is due; before the film's first pass, the
+    /// coarse preview passes, each shown as soon as it is done.
     fn step(&mut self) {
         let Some(job) = &mut self.job else { return };
         if job.status != JobStatus::Running {
             return;
+        }
+        if job.renderer.stats().complete_passes == 0 && !job.blocks.is_empty() {
+            let block = job.blocks.remove(0);
+            let pool = self.preview_pool.as_ref().map(|(_, p)| p.clone());
+            let r = &job.renderer;
+            let image =
+                pool.and_then(|pool| coarse_pass(&r.scene, &r.settings, block, pool, &self.cancel));
+            match image {
+                Some(image) => {
+                    job.preview = Some(image);
+                    self.snapshot(true);
+                }
+                // Cancelled by a new command: this block again after it, if the job goes on.
+                None if self.cancel.load(Ordering::Relaxed) => job.blocks.insert(0, block),
+                None => {}
+            }
+            return;
+        }
+        if job.renderer.stats().complete_passes > 0 {
+            job.preview = None;
         }
         // About a frame's worth of passes: the threads meet once a batch, and the preview
         // could not show more often anyway.
@@ -509,54 +585,6 @@ impl Worker {
             .as_ref()
             .is_some_and(|j| j.status != JobStatus::Running);
         self.snapshot(changed);
-    }
-
-    /// Write the current film to `path` (the `w` key).
-    fn save_film(&self, path: &std::path::Path) -> Result<(), String> {
-        let (Some(job), Some((spec, _))) = (&self.job, &self.scene) else {
-            return Err("nothing rendered yet".into());
-        };
-        let hash = film_file::scene_hash(spec)?;
-        let head = FilmHeader::new(spec, &hash, &job.renderer.settings);
-        let header = film_file::header_of(&job.renderer, &head);
-        film_file::write(
-            path,
-            &header,
-            job.renderer.film(),
-            job.renderer.sample_map(),
-        )
-        .map_err(|e| e.to_string())
-    }
-
-    /// Continue the film in `path` in the current job, started with the film's settings.
-    fn resume_film(&mut self, path: &std::path::Path) -> Result<(), String> {
-        let (h, film, map) = film_file::read(path).map_err(|e| e.to_string())?;
-        let (Some(job), Some((spec, _))) = (&mut self.job, &self.scene) else {
-            return Err("no render to continue".into());
-        };
-        let hash = film_file::scene_hash(spec)?;
-        let head = FilmHeader::new(spec, &hash, &job.renderer.settings);
-        head.same_render(&h)
-            .map_err(|e| format!("not a film of this render: {e}"))?;
-        let (first, next) = match h.passes.as_slice() {
-            [] => (0, 0),
-            [r] => (r[0], r[1]),
-            _ => return Err(format!("its passes {} have gaps", h.passes_text())),
-        };
-        let mut stats = h.stats.to_render();
-        stats.passes = next;
-        job.renderer.resume(film, first, next, h.until, stats, map);
-        if h.shard.is_none() {
-            job.renderer.set_end(None);
-        }
-        if job.renderer.needs_pilot() {
-            let map = job.renderer.pilot_map(&AtomicBool::new(false));
-            job.renderer.set_map(map);
-        }
-        job.status = JobStatus::Running;
-        self.update_status();
-        self.snapshot(true);
-        Ok(())
     }
 
     /// Send a snapshot if forced or the last one is older than the minimum interval.
@@ -576,6 +604,10 @@ impl Worker {
         let snap = Snapshot {
             job: job.id,
             image: film.mean_image(),
+            preview: job
+                .preview
+                .clone()
+                .filter(|_| job.renderer.stats().complete_passes == 0),
             stats: job.renderer.stats(),
             error,
             target_spp: job.renderer.settings.spp,
@@ -584,6 +616,30 @@ impl Worker {
         };
         self.send(SessionEvent::Progress(Arc::new(snap)));
     }
+}
+
+/// The commands in order, but of several `Start`s only the newest (fresh if any of them was):
+/// a request states the whole render, so the ones it replaces would only be built to be
+/// cancelled (holding a key that moves the camera queues one per repeat).
+fn newest_start_only(commands: Vec<Command>) -> Vec<Command> {
+    let fresh = commands
+        .iter()
+        .any(|c| matches!(c, Command::Start(r) if r.fresh));
+    let last = commands
+        .iter()
+        .rposition(|c| matches!(c, Command::Start(_)));
+    commands
+        .into_iter()
+        .enumerate()
+        .filter(|(i, c)| !matches!(c, Command::Start(_)) || Some(*i) == last)
+        .map(|(_, c)| match c {
+            Command::Start(mut r) => {
+                r.fresh |= fresh;
+                Command::Start(r)
+            }
+            c => c,
+        })
+        .collect()
 }
 
 /// Whether two settings produce the same film (they may differ in when to stop and in how the
@@ -656,7 +712,7 @@ mod tests {
         let (tx, rx) = mpsc::channel();
         let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
         let mut req = request(1, 1, IntegratorKind::Path);
-        req.scene = path.to_string_lossy().into_owned();
+        req.scene = path.to_string_lossy().into_owned().into();
         worker.send(Command::Start(req));
         let mut stages = Vec::new();
         loop {
@@ -775,6 +831,194 @@ mod tests {
         worker.shutdown();
     }
 
+    /// The film's mean bits.
+    fn bits(image: &MeanImage) -> Vec<u64> {
+        (0..image.pixels())
+            .flat_map(|i| image.get(i).map(f64::to_bits))
+            .collect()
+    }
+
+    #[test]
+    fn coarse_previews_come_first_and_leave_the_film_as_without_them() {
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        // A camera moved in the scene's text: 160x120 takes previews at blocks 4 and 2.
+        let src = crate::scene::builtin::get("cornell").unwrap();
+        let moved = src.replace("position = [50, 52, 295.6]", "position = [55, 50, 290]");
+        assert_ne!(moved, src);
+        let mut req = request(1, 3, IntegratorKind::Path);
+        req.cli.width = Some(160);
+        req.cli.height = Some(120);
+        req.scene.text = Some(moved.as_str().into());
+        worker.send(Command::Start(req.clone()));
+        let mut blocks = Vec::new();
+        let done = loop {
+            match rx.recv_timeout(Duration::from_secs(120)) {
+                Ok(SessionEvent::Progress(s)) => {
+                    match &s.preview {
+                        Some(p) => {
+                            assert_eq!(s.stats.complete_passes, 0, "a preview before the film");
+                            blocks.push(p.block());
+                        }
+                        None if s.stats.complete_passes > 0 => assert!(blocks.len() == 2),
+                        None => {}
+                    }
+                    if s.status == JobStatus::Done {
+                        break s;
+                    }
+                }
+                Ok(SessionEvent::Failed { message, .. }) => panic!("{message}"),
+                Ok(_) => {}
+                Err(e) => panic!("no finished render: {e}"),
+            }
+        };
+        assert_eq!(blocks, vec![4, 2]);
+        worker.shutdown();
+        // The film is the one a render of the moved scene without previews makes, bit for bit.
+        let scene = crate::scene::load_text("cornell", &moved, &Default::default()).unwrap();
+        let settings = RenderSettings::resolve(&scene.render, &req.cli, None);
+        let mut r = Renderer::new(Arc::new(scene), settings).unwrap();
+        r.render(&AtomicBool::new(false), |_| true);
+        assert_eq!(done.stats.complete_passes, 3);
+        assert_eq!(bits(&done.image), bits(&r.film().mean_image()));
+    }
+
+    #[test]
+    fn the_same_text_written_under_another_name_goes_on_with_the_film() {
+        let dir = tempfile::tempdir().unwrap();
+        let src = crate::scene::builtin::get("cornell").unwrap();
+        let (a, b) = (dir.path().join("a.toml"), dir.path().join("b.toml"));
+        std::fs::write(&a, src).unwrap();
+        std::fs::write(&b, src).unwrap();
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        let mut req = request(1, 2, IntegratorKind::Path);
+        req.scene = SceneSource::from(a.to_str().unwrap());
+        worker.send(Command::Start(req.clone()));
+        let first = until(&rx, JobStatus::Done);
+        req.id = 2;
+        req.cli.spp = Some(3);
+        req.scene = SceneSource {
+            text: Some(src.into()),
+            ..SceneSource::from(b.to_str().unwrap())
+        };
+        worker.send(Command::Start(req.clone()));
+        let more = until(&rx, JobStatus::Done);
+        assert_eq!((more.job, more.stats.complete_passes), (first.job, 3));
+        // Another text is another scene.
+        req.id = 3;
+        req.scene.text = Some(src.replace("emission = 12", "emission = 11").into());
+        worker.send(Command::Start(req));
+        assert_ne!(until(&rx, JobStatus::Done).job, first.job);
+        worker.shutdown();
+    }
+
+    #[test]
+    fn requests_in_quick_succession_leave_every_pass_of_the_last_film_whole() {
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        let mut id = 0;
+        for seed in 0..40 {
+            // A new film, or two at once, to an idle or a busy worker: every pass of the film
+            // that renders must be whole (a cancel meant for another command must not cut its
+            // first pass short).
+            for s in (0..1 + seed % 2).map(|k| 2 * seed + k) {
+                id += 1;
+                let mut req = request(id, 3, IntegratorKind::Path);
+                req.cli.seed = Some(s);
+                worker.send(Command::Start(req));
+            }
+            let done = until(&rx, JobStatus::Done);
+            assert_eq!(
+                (done.stats.passes, done.stats.complete_passes),
+                (3, 3),
+                "round {seed}"
+            );
+        }
+        worker.shutdown();
+    }
+
+    /// Wait for a film save to succeed.
+    fn film_saved(rx: &Receiver<SessionEvent>) {
+        loop {
+            match rx.recv_timeout(Duration::from_secs(60)) {
+                Ok(SessionEvent::FilmSaved(r)) => return r.map(|_| ()).unwrap(),
+                Ok(_) => {}
+                Err(e) => panic!("no film saved: {e}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_film_of_an_edited_scene_names_its_text_written_beside_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        let src = crate::scene::builtin::get("cornell").unwrap();
+        let moved = src.replace("position = [50, 52, 295.6]", "position = [45, 52, 290]");
+        let mut req = request(1, 3, IntegratorKind::Path);
+        req.scene.text = Some(moved.as_str().into());
+        worker.send(Command::Start(req.clone()));
+        let done = until(&rx, JobStatus::Done);
+        let film = dir.path().join("part.film");
+        worker.send_after_batch(Command::SaveFilm(film.clone()));
+        film_saved(&rx);
+        worker.shutdown();
+        // The film names the edited text, written beside it, not the built-in.
+        let side = dir.path().join("part.toml");
+        assert_eq!(std::fs::read_to_string(&side).unwrap(), moved);
+        let (h, film_data, _) = crate::io::film_file::read(&film).unwrap();
+        assert_eq!(h.scene, side.to_str().unwrap());
+        assert_eq!(
+            h.scene_hash,
+            crate::io::film_file::scene_hash(&h.scene).unwrap()
+        );
+        assert_eq!(bits(&film_data.mean_image()), bits(&done.image));
+        // An unedited scene's film names the scene itself.
+        let (tx, rx) = mpsc::channel();
+        let worker = SessionHandle::spawn(sink(tx), Duration::ZERO).unwrap();
+        req.scene.text = Some(src.into());
+        worker.send(Command::Start(req));
+        until(&rx, JobStatus::Done);
+        let plain = dir.path().join("plain.film");
+        worker.send_after_batch(Command::SaveFilm(plain.clone()));
+        film_saved(&rx);
+        worker.shutdown();
+        assert_eq!(
+            crate::io::film_file::read(&plain).unwrap().0.scene,
+            "cornell"
+        );
+        assert!(!dir.path().join("plain.toml").exists());
+    }
+
+    #[test]
+    fn of_the_starts_queued_only_the_newest_is_built() {
+        let starts = |ids: &[u64]| -> Vec<Command> {
+            ids.iter()
+                .map(|&id| {
+                    let mut r = request(id, 1, IntegratorKind::Path);
+                    r.fresh = id == 2;
+                    Command::Start(r)
+                })
+                .collect()
+        };
+        let mut cmds = starts(&[1, 2]);
+        cmds.push(Command::Pause(true));
+        cmds.extend(starts(&[3]));
+        cmds.push(Command::SaveFilm("x.film".into()));
+        let kept: Vec<String> = newest_start_only(cmds)
+            .iter()
+            .map(|c| match c {
+                Command::Start(r) => format!("start {} fresh {}", r.id, r.fresh),
+                other => format!("{other:?}"),
+            })
+            .collect();
+        assert_eq!(
+            kept,
+            vec!["Pause(true)", "start 3 fresh true", "SaveFilm(\"x.film\")"]
+        );
+    }
+
     #[test]
     fn a_panic_is_reported_and_the_worker_goes_on() {
         let (tx, rx) = mpsc::channel();
@@ -785,6 +1029,7 @@ mod tests {
             cancel: Arc::new(AtomicBool::new(false)),
             min_interval: Duration::ZERO,
             pool: None,
+            preview_pool: None,
             scene: None,
             job: None,
             next_job: 1,

@@ -1,14 +1,17 @@
 //! The UI model: everything the view shows, updated by events. No threads, no terminal: the main
 //! loop turns the [`Action`]s it returns into commands, and the view is a function of it.
 
+use super::camera::Rig;
 use super::color::{ColorChoice, ColorMode};
 use super::form::{Field, Form, Shown};
 use super::graphics::Picture;
-use super::layout::layout;
+use super::pick::Flash;
 use super::preview::{PreviewCache, ViewState};
 use super::save::SaveKind;
+use super::scene_form::{self, Picked};
+use crate::scene::edit::SceneDoc;
 use crate::scene::Scene;
-use crate::session::{BuildNotes, JobStatus, Request, SessionEvent, Snapshot};
+use crate::session::{BuildNotes, JobStatus, Request, SceneSource, Snapshot};
 use crate::settings::{RenderSettings, SettingsOverrides};
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use ratatui::layout::Rect;
@@ -22,12 +25,17 @@ use std::time::{Duration, Instant};
 #[derive(Debug, PartialEq)]
 pub enum Action {
     Start(Request),
+    /// A request that cannot change the image (the scene written under its file's name): taken
+    /// after the running batch, so no pass is cut short.
+    Update(Request),
     Pause(bool),
     Save(SaveKind),
     /// Write the whole film (`w`), to merge or continue later.
     SaveFilm,
     Quit,
 }
+
+pub use super::pictures::Redraw;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Message {
@@ -50,8 +58,11 @@ pub struct App {
     pub snapshot: Option<Arc<Snapshot>>,
     /// The scene load under way (stage, total, done), until its render starts or fails.
     pub loading: Option<(String, u64, u64)>,
+    /// The snapshot whose picture the preview shows: `snapshot`, except while a new film has
+    /// nothing to show yet (the last picture stays instead of a black one).
+    pub(super) shown: Option<Arc<Snapshot>>,
     /// A snapshot received but not yet turned into preview colours (done once per frame).
-    pending: Option<Arc<Snapshot>>,
+    pub(super) pending: Option<Arc<Snapshot>>,
     pub color_mode: ColorMode,
     /// Half-block preview (two sub-pixels per cell) or background-coloured spaces only.
     pub halfblock: bool,
@@ -67,7 +78,7 @@ pub struct App {
     /// cell preview is then not computed.
     pub graphics: Option<Picture>,
     /// When the preview was last recomputed and how long that took (for mid-pass refreshes).
-    preview_at: Option<(Instant, Duration)>,
+    pub(super) preview_at: Option<(Instant, Duration)>,
     pub size: Rect,
     /// (render seconds, estimated RMSE) of the current film, for the chart.
     pub history: Vec<(f64, f64)>,
@@ -77,9 +88,38 @@ pub struct App {
     /// Set when the first request fails: there is nothing to show, so leave with this error.
     pub fatal: Option<String>,
     /// The scene and form layer of the last accepted request, restored if a request fails.
-    accepted: Option<(String, SettingsOverrides)>,
-    next_request: u64,
+    pub(super) accepted: Option<(String, SettingsOverrides, Option<SceneDoc>)>,
+    pub(super) next_request: u64,
     pub quit: bool,
+    /// The scene's text with the edits made in the TUI (None if it could not be read: the
+    /// request names the scene and the worker reports why).
+    pub doc: Option<SceneDoc>,
+    /// Raised when a file the scene reads (besides its own text) changed on disk.
+    pub(super) generation: u64,
+    /// Camera mode (`v`): the keys move the camera.
+    pub camera_mode: bool,
+    pub(super) rig: Option<Rig>,
+    /// Camera moves of one stay in camera mode are one step of undo.
+    pub(super) camera_group: u64,
+    /// The object picked (`o`, a click), whose keys the form shows.
+    pub picked: Option<Picked>,
+    /// The picked object's outline, shown briefly.
+    pub flash: Option<Flash>,
+    /// The files the scene reads, for the watcher.
+    pub watched: Vec<std::path::PathBuf>,
+    /// Requests sent on a key press and when the key was read, until a picture of that request
+    /// shows (the `--bench-log`'s key-to-image latency).
+    pub(super) view_keys: Vec<(u64, Instant)>,
+    /// (job, request) of the requests the worker started, newest last.
+    pub(super) jobs: Vec<(u64, u64)>,
+    /// Where a mouse drag in camera mode was last.
+    pub(super) drag: Option<(u16, u16)>,
+    /// The request that renders the scene file as last reloaded, and whether the file as it is
+    /// on disk fails to load (its error stays on the status line until the file is fixed).
+    pub(super) reload_request: Option<u64>,
+    pub(super) reload_failed: bool,
+    /// A reload not yet drawn (for the `--bench-log`).
+    pub reloaded: bool,
 }
 
 impl App {
@@ -90,6 +130,11 @@ impl App {
         color_mode: ColorMode,
         halfblock: bool,
     ) -> App {
+        let doc = SceneDoc::open(&scene).ok();
+        let watched = doc
+            .as_ref()
+            .map(|d| crate::scene::reload::sources(&d.spec, &d.text()))
+            .unwrap_or_default();
         App {
             form: Form::new(scene.clone(), color),
             cli,
@@ -99,6 +144,7 @@ impl App {
             scene: None,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             snapshot: None,
+            shown: None,
             pending: None,
             color_mode,
             halfblock,
@@ -119,6 +165,20 @@ impl App {
             accepted: None,
             next_request: 0,
             quit: false,
+            doc,
+            generation: 0,
+            camera_mode: false,
+            rig: None,
+            camera_group: 0,
+            picked: None,
+            flash: None,
+            watched,
+            view_keys: Vec::new(),
+            jobs: Vec::new(),
+            drag: None,
+            reload_request: None,
+            reload_failed: false,
+            reloaded: false,
         }
     }
 
@@ -131,182 +191,74 @@ impl App {
         self.snapshot.as_ref().map(|s| s.status)
     }
 
-    /// A request for the current scene and form (`fresh`: start a new film even if the current
-    /// one could go on).
+    /// A request for the current scene (as edited) and form (`fresh`: start a new film even if
+    /// the current one could go on).
     pub fn request(&mut self, fresh: bool) -> Request {
         self.next_request += 1;
+        let scene = match &self.doc {
+            Some(d) => SceneSource {
+                spec: d.spec.clone(),
+                text: Some(d.text().into()),
+                generation: self.generation,
+            },
+            None => SceneSource {
+                generation: self.generation,
+                ..SceneSource::from(self.form.scene.as_str())
+            },
+        };
         Request {
             id: self.next_request,
-            scene: self.form.scene.clone(),
+            scene,
             cli: self.cli.clone(),
             form: self.form.overrides.clone(),
             fresh,
         }
     }
 
+    /// The form's fields shown now: the render fields for the integrator in effect, then the
+    /// scene's (environment, picked object).
+    pub fn fields(&self) -> Vec<Field> {
+        let mut fields: Vec<Field> = Field::visible(self.settings().integrator).collect();
+        if let Some(doc) = &self.doc {
+            fields.extend(scene_form::fields(doc, self.picked.as_ref()));
+        }
+        fields
+    }
+
+    /// A field's value as the form shows it (a scene's vector without its brackets and commas,
+    /// `0.63 0.065 0.05`, to fit the column).
+    pub fn field_value(&self, field: Field, now: &Shown) -> String {
+        match &self.doc {
+            Some(_) if field.of_scene() => {
+                let text = self.scene_value(field);
+                match text.strip_prefix('[').and_then(|t| t.strip_suffix(']')) {
+                    Some(inner) => inner
+                        .split(',')
+                        .map(str::trim)
+                        .collect::<Vec<_>>()
+                        .join(" "),
+                    None => text,
+                }
+            }
+            _ => self.form.value(field, now),
+        }
+    }
+
+    /// A scene field's value as TOML text (what an edit starts from).
+    fn scene_value(&self, field: Field) -> String {
+        self.doc.as_ref().map_or(String::new(), |doc| {
+            scene_form::value(field, doc, self.picked.as_ref(), self.scene.as_deref())
+        })
+    }
+
+    /// The snapshot whose picture the preview shows.
+    pub fn shown_snapshot(&self) -> Option<&Arc<Snapshot>> {
+        self.shown.as_ref()
+    }
+
     pub fn resize(&mut self, width: u16, height: u16) {
         self.size = Rect::new(0, 0, width, height);
         self.refresh_preview(None);
-    }
-
-    /// Recompute the preview's colours, from a new snapshot or the last one.
-    pub fn refresh_preview(&mut self, snap: Option<Arc<Snapshot>>) {
-        if let Some(s) = snap {
-            self.snapshot = Some(s);
-        }
-        let Some(snap) = self.snapshot.clone() else {
-            return;
-        };
-        let Some(area) = layout(self.size, self.show_chart).preview else {
-            return;
-        };
-        let s = self.settings();
-        let started = Instant::now();
-        match &mut self.graphics {
-            Some(g) => g.update(&snap, area, &self.view, s.exposure, s.tonemap),
-            None => self.preview.update(
-                &snap,
-                area,
-                &self.view,
-                self.halfblock,
-                s.exposure,
-                s.tonemap,
-            ),
-        }
-        self.preview_at = Some((started, started.elapsed()));
-    }
-
-    /// The geometry of the preview as shown (graphics pixels or cell sub-pixels), if any.
-    pub fn geometry(&self) -> Option<super::preview::Geometry> {
-        match &self.graphics {
-            Some(g) => g.geometry(),
-            None => self.preview.geometry(),
-        }
-    }
-
-    /// Preview pixels that changed at the last recompute.
-    fn preview_changed(&self) -> usize {
-        self.graphics
-            .as_ref()
-            .map_or(self.preview.changed, |g| g.changed)
-    }
-
-    /// Recompute the preview from the film's image as it is now, if the render is running and
-    /// no snapshot came for a while: a pass of a large image takes seconds (8 s at 3840x2160),
-    /// and the image is shared with the render, so the rows it has reached can show before it
-    /// ends. At most every second, and at most 1/40 of the UI thread's time (a 3840x2160
-    /// preview reads 200 MB). Returns whether any sub-pixel changed.
-    pub fn refresh_live(&mut self) -> bool {
-        if self.status() != Some(JobStatus::Running) || self.pending.is_some() {
-            return false;
-        }
-        let due = self
-            .preview_at
-            .is_none_or(|(at, cost)| at.elapsed() >= (cost * 40).max(Duration::from_secs(1)));
-        if !due {
-            return false;
-        }
-        self.refresh_preview(None);
-        self.preview_changed() > 0
-    }
-
-    /// Apply the newest snapshot received since the last frame, if any.
-    pub fn apply_pending(&mut self) -> bool {
-        match self.pending.take() {
-            Some(s) => {
-                self.refresh_preview(Some(s));
-                true
-            }
-            None => false,
-        }
-    }
-
-    /// A worker event; returns whether the screen changed.
-    pub fn on_worker(&mut self, ev: SessionEvent) -> bool {
-        let changed = self.on_worker_event(ev);
-        // A new scene's `[render]` table or a rolled-back form may change the integrator, and
-        // with it which fields the form shows.
-        self.form.keep_visible(self.settings().integrator);
-        changed
-    }
-
-    fn on_worker_event(&mut self, ev: SessionEvent) -> bool {
-        match ev {
-            SessionEvent::Started {
-                request,
-                restarted,
-                settings: _,
-                scene_render,
-                scene_name,
-                scene,
-                notes,
-                threads,
-                ..
-            } => {
-                self.loading = None;
-                self.scene = Some(scene);
-                self.scene_render = scene_render;
-                self.scene_name = scene_name;
-                self.notes = notes;
-                self.threads = threads;
-                self.worker_panic = None;
-                if request == self.next_request {
-                    self.accepted = Some((self.form.scene.clone(), self.form.overrides.clone()));
-                }
-                if restarted {
-                    self.history.clear();
-                }
-            }
-            SessionEvent::FilmSaved(result) => {
-                self.on_saved(result);
-                return true;
-            }
-            SessionEvent::Progress(snap) => {
-                let new_job = self.snapshot.as_ref().is_none_or(|s| s.job != snap.job);
-                if new_job {
-                    self.history.clear();
-                }
-                let t = snap.stats.elapsed.as_secs_f64();
-                let rmse = snap.error.rmse;
-                // Points 2% apart in time: evenly spread on the log axis, a few hundred per hour.
-                if rmse.is_finite()
-                    && rmse > 0.0
-                    && t > 0.0
-                    && self.history.last().is_none_or(|&(t0, _)| t >= t0 * 1.02)
-                {
-                    self.history.push((t, rmse));
-                }
-                // The first snapshot of a render is applied at once (so a tiny render that
-                // finishes between two frames still shows); later ones wait for the next frame.
-                if self.snapshot.is_none() || new_job {
-                    self.refresh_preview(Some(snap));
-                } else {
-                    self.pending = Some(snap);
-                }
-            }
-            SessionEvent::Loading { stage, total, done } => {
-                self.loading = Some((stage, total, done));
-            }
-            SessionEvent::Failed { request, message } => {
-                self.loading = None;
-                if self.accepted.is_none() && self.snapshot.is_none() {
-                    self.fatal = Some(message);
-                    self.quit = true;
-                    return true;
-                }
-                if request == self.next_request {
-                    if let Some((scene, overrides)) = self.accepted.clone() {
-                        self.form.scene = scene;
-                        self.form.overrides = overrides;
-                    }
-                }
-                self.message = Some(Message::Error(message));
-            }
-            SessionEvent::Panicked(msg) => {
-                self.worker_panic = Some(msg);
-            }
-        }
-        true
     }
 
     /// The scene camera's lens radius and focus distance ((0, 0) before a scene is loaded).
@@ -354,14 +306,18 @@ impl App {
         });
     }
 
-    fn shown(&self, settings: &RenderSettings) -> String {
+    /// The text an edit of the selected field starts from.
+    fn edit_text(&self, settings: &RenderSettings) -> String {
         let now = Shown {
             settings,
             color_mode: self.color_mode,
             threads: self.threads,
             lens: self.lens(),
         };
-        self.form.edit_text(self.form.field(), &now)
+        match self.form.field() {
+            f if f.of_scene() => self.scene_value(f),
+            f => self.form.edit_text(f, &now),
+        }
     }
 
     /// A key press.
@@ -381,17 +337,30 @@ impl App {
         if self.form.editing.is_some() {
             return self.on_edit_key(key, ctrl);
         }
+        if self.camera_mode {
+            if let Some(action) = self.on_camera_key(key) {
+                return action;
+            }
+        }
         match key.code {
+            KeyCode::Char('r') if ctrl => return self.redo(),
             KeyCode::Char('q') | KeyCode::Esc => {
                 self.quit = true;
                 return Some(Action::Quit);
             }
             KeyCode::Char('?') => self.show_help = true,
             KeyCode::Char('i') => self.show_details = true,
-            KeyCode::Tab => self.form.select_next(true, self.settings().integrator),
-            KeyCode::BackTab => self.form.select_next(false, self.settings().integrator),
+            KeyCode::Char('v') => self.set_camera_mode(true),
+            KeyCode::Char('o') => return self.pick_at_centre(),
+            KeyCode::Char('W') => return self.write_scene(),
+            KeyCode::Char('u') => return self.undo(),
+            KeyCode::Tab => self.form.select_next(true, &self.fields()),
+            KeyCode::BackTab => self.form.select_next(false, &self.fields()),
             KeyCode::Enter => {
                 let field = self.form.field();
+                if field.of_scene() && field.cycles() {
+                    return self.cycle_scene_field(field);
+                }
                 if field.cycles() {
                     let s = self.settings();
                     let now = Shown {
@@ -403,7 +372,7 @@ impl App {
                     self.form.cycle(field, &now);
                     return self.changed(field);
                 }
-                let text = self.shown(&self.settings());
+                let text = self.edit_text(&self.settings());
                 self.form.editing = Some(text);
             }
             KeyCode::Char(' ') => {
@@ -420,6 +389,8 @@ impl App {
                     ColorMode::Truecolor => ColorChoice::Truecolor,
                     ColorMode::Ansi256 => ColorChoice::Ansi256,
                 };
+                // 256 colours need the dither plans truecolor did without.
+                self.refresh_preview(None);
             }
             KeyCode::Char('f') => {
                 self.halfblock = !self.halfblock;
@@ -430,8 +401,8 @@ impl App {
                 self.show_chart = !self.show_chart;
                 self.refresh_preview(None);
             }
-            KeyCode::Char('+') | KeyCode::Char('=') => self.zoom(true),
-            KeyCode::Char('-') => self.zoom(false),
+            KeyCode::Char('+') | KeyCode::Char('=') => self.zoom_preview(true),
+            KeyCode::Char('-') => self.zoom_preview(false),
             KeyCode::Char('0') => {
                 self.view = ViewState::default();
                 self.refresh_preview(None);
@@ -446,9 +417,14 @@ impl App {
     }
 
     fn on_edit_key(&mut self, key: KeyEvent, ctrl: bool) -> Option<Action> {
+        let scene_field = self.form.field().of_scene();
         let text = self.form.editing.as_mut()?;
         match key.code {
             KeyCode::Esc => self.form.editing = None,
+            KeyCode::Enter if scene_field => {
+                let text = text.clone();
+                return self.commit_scene_field(self.form.field(), &text);
+            }
             KeyCode::Enter => {
                 let text = text.clone();
                 let field = self.form.field();
@@ -474,8 +450,16 @@ impl App {
     /// A form field changed: restart or update the render, or only the display.
     fn changed(&mut self, field: Field) -> Option<Action> {
         match field {
+            Field::Scene => {
+                // Another scene: its own text, nothing picked, a new film.
+                self.doc = SceneDoc::open(&self.form.scene).ok();
+                self.picked = None;
+                self.scene_changed();
+                Some(Action::Start(self.request(false)))
+            }
             Field::Color => {
                 self.color_mode = self.form.color.resolve();
+                self.refresh_preview(None);
                 None
             }
             Field::Exposure | Field::Tonemap => {
@@ -507,7 +491,7 @@ impl App {
         Some(Action::Save(kind))
     }
 
-    fn zoom(&mut self, zoom_in: bool) {
+    pub(super) fn zoom_preview(&mut self, zoom_in: bool) {
         let Some(g) = self.geometry() else {
             return;
         };
@@ -539,7 +523,7 @@ mod tests {
     use super::*;
     use crate::math::DVec3;
     use crate::sampling::SamplerKind;
-    use crate::session::{Command, SessionHandle};
+    use crate::session::{Command, SessionEvent, SessionHandle};
     use crate::settings::{Hemisphere, IntegratorKind};
     use crate::tui::event::Event;
     use std::sync::mpsc::{self, Receiver};
@@ -611,6 +595,7 @@ mod tests {
             Arc::new(Snapshot {
                 job: 1,
                 image: image.clone(),
+                preview: None,
                 stats: Default::default(),
                 error: Default::default(),
                 target_spp: 2,

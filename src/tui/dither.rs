@@ -251,16 +251,18 @@ pub fn plan_for(rgb: [u8; 3]) -> Plan {
     Plan(plan)
 }
 
-/// Nearest palette entry in OKLab, no dither (for comparison in tests).
+/// Nearest palette entry in OKLab, no dither (the coarse preview's colours; for comparison in
+/// tests). The first of equally near entries.
 pub fn nearest(rgb: [u8; 3]) -> u8 {
     let lab = oklab(rgb);
-    (16..=255u8)
-        .min_by(|&p, &q| {
-            let dp = dist2(PALETTE[(p - 16) as usize].lab, lab);
-            let dq = dist2(PALETTE[(q - 16) as usize].lab, lab);
-            dp.total_cmp(&dq)
-        })
-        .unwrap_or(16)
+    let mut best = (f32::INFINITY, 16u8);
+    for (k, entry) in PALETTE.iter().enumerate() {
+        let d = dist2(entry.lab, lab);
+        if d < best.0 {
+            best = (d, 16 + k as u8);
+        }
+    }
+    best.1
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! resizes), a tick, termination signals; the render worker and save threads send on it too.
 
 use crate::session::SessionEvent;
-use crossterm::event::{self as ct, KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
+use crossterm::event::{self as ct, KeyCode, KeyEvent, KeyEventKind, KeyModifiers, MouseEvent};
 use std::path::PathBuf;
 use std::sync::mpsc::Sender;
 use std::time::{Duration, Instant};
@@ -13,7 +13,11 @@ use std::time::{Duration, Instant};
 pub enum Event {
     /// A key press, with the moment it was read (for latency measurement).
     Key(KeyEvent, Instant),
+    /// A click, drag or wheel turn (where the terminal reports the mouse), and when it was read.
+    Mouse(MouseEvent, Instant),
     Resize(u16, u16),
+    /// Files the scene reads changed on disk (see `watch`).
+    FilesChanged(Vec<PathBuf>),
     Tick,
     Render(SessionEvent),
     /// A save finished: the path written, or what went wrong.
@@ -24,7 +28,8 @@ pub enum Event {
     InputError(String),
 }
 
-/// Read terminal events forever; only key presses (not repeats or releases) pass.
+/// Read terminal events forever; key presses (not repeats or releases), the mouse's clicks,
+/// drags and wheel, and resizes pass.
 pub fn spawn_input(tx: Sender<Event>) -> std::io::Result<()> {
     std::thread::Builder::new()
         .name("ptui-input".into())
@@ -34,6 +39,9 @@ pub fn spawn_input(tx: Sender<Event>) -> std::io::Result<()> {
                     Event::Key(k, Instant::now())
                 }
                 Ok(ct::Event::Resize(w, h)) => Event::Resize(w, h),
+                Ok(ct::Event::Mouse(m)) if m.kind != ct::MouseEventKind::Moved => {
+                    Event::Mouse(m, Instant::now())
+                }
                 Ok(_) => continue,
                 Err(e) => {
                     let _ = tx.send(Event::InputError(e.to_string()));

@@ -35,9 +35,16 @@ pub enum Field {
     TargetError,
     Aperture,
     Focus,
+    /// The scene's fields (see `scene_form`): the environment's intensity and rotation about y,
+    /// the picked object's keys (an index into `OBJECT_KEYS`) and a light's power.
+    EnvIntensity,
+    EnvRotate,
+    Object(usize),
+    Power,
 }
 
 impl Field {
+    /// The render fields, in order (the scene fields follow them when shown).
     pub const ALL: [Field; 20] = [
         Field::Scene,
         Field::Width,
@@ -83,6 +90,10 @@ impl Field {
             Field::TargetError => "target err",
             Field::Aperture => "aperture",
             Field::Focus => "focus",
+            Field::EnvIntensity => "intensity",
+            Field::EnvRotate => "rotate y",
+            Field::Object(k) => super::scene_form::OBJECT_KEYS[k].label,
+            Field::Power => "power",
         }
     }
 
@@ -92,6 +103,7 @@ impl Field {
             Field::Correlation => "correlation",
             Field::TargetError => "target error",
             Field::Focus => "focus distance",
+            Field::EnvRotate => "rotate",
             _ => self.label(),
         }
     }
@@ -116,6 +128,14 @@ impl Field {
                 | Field::Adaptive
                 | Field::Tonemap
                 | Field::Color
+        ) || super::scene_form::cycles(self)
+    }
+
+    /// A field of the scene (edits its text) rather than of the render settings.
+    pub fn of_scene(self) -> bool {
+        matches!(
+            self,
+            Field::EnvIntensity | Field::EnvRotate | Field::Object(_) | Field::Power
         )
     }
 
@@ -182,27 +202,26 @@ impl Form {
         self.selected
     }
 
-    /// Select the next (or previous) field shown for `integrator`, wrapping around.
-    pub fn select_next(&mut self, forward: bool, integrator: IntegratorKind) {
-        let n = Field::ALL.len();
-        let mut i = Field::ALL
-            .iter()
-            .position(|&f| f == self.selected)
-            .unwrap_or(0);
-        for _ in 0..n {
-            i = (i + if forward { 1 } else { n - 1 }) % n;
-            if Field::ALL[i].shown_for(integrator) {
-                break;
-            }
+    /// Select the next (or previous) of the fields shown, `visible`, wrapping around.
+    pub fn select_next(&mut self, forward: bool, visible: &[Field]) {
+        let n = visible.len();
+        if n == 0 {
+            return;
         }
-        self.selected = Field::ALL[i];
+        let i = visible.iter().position(|&f| f == self.selected);
+        let i = match (i, forward) {
+            (Some(i), true) => (i + 1) % n,
+            (Some(i), false) => (i + n - 1) % n,
+            (None, _) => 0,
+        };
+        self.selected = visible[i];
     }
 
     /// If the selected field is no longer shown (the integrator changed under it: a failed
-    /// request was rolled back, or a scene file chose another one), select the integrator and
-    /// drop the edit in progress. Returns whether the selection moved.
-    pub fn keep_visible(&mut self, integrator: IntegratorKind) -> bool {
-        if self.selected.shown_for(integrator) {
+    /// request was rolled back, or a scene file chose another one; the picked object changed),
+    /// select the integrator and drop the edit in progress. Returns whether the selection moved.
+    pub fn keep_visible(&mut self, visible: &[Field]) -> bool {
+        if visible.contains(&self.selected) {
             return false;
         }
         self.selected = Field::Integrator;
@@ -242,6 +261,10 @@ impl Form {
                 _ => "0 (pinhole)".into(),
             },
             Field::Focus => short_number(s.focus_distance.unwrap_or(now.lens.1)),
+            // Shown by `scene_form`, from the scene's text.
+            Field::EnvIntensity | Field::EnvRotate | Field::Object(_) | Field::Power => {
+                String::new()
+            }
         }
     }
 
@@ -394,6 +417,8 @@ impl Form {
             | Field::Adaptive
             | Field::Tonemap
             | Field::Color => {}
+            // Edits of the scene's text: `scene_form::commit`.
+            Field::EnvIntensity | Field::EnvRotate | Field::Object(_) | Field::Power => {}
         }
         Ok(())
     }
@@ -524,19 +549,20 @@ mod tests {
         assert!(path.contains(&Field::Sampler));
 
         let mut f = Form::new("cornell".into(), ColorChoice::Auto);
+        let shown = |i| Field::visible(i).collect::<Vec<_>>();
         f.selected = Field::Integrator;
-        f.select_next(true, IntegratorKind::Path);
+        f.select_next(true, &shown(IntegratorKind::Path));
         assert_eq!(f.field(), Field::Sampler);
-        f.select_next(false, IntegratorKind::Painterly);
+        f.select_next(false, &shown(IntegratorKind::Painterly));
         assert_eq!(f.field(), Field::Strength);
         f.editing = Some("0.5".into());
         // The integrator changed under the selection: back to it, edit dropped.
-        assert!(f.keep_visible(IntegratorKind::Naive));
+        assert!(f.keep_visible(&shown(IntegratorKind::Naive)));
         assert_eq!((f.field(), f.editing.clone()), (Field::Integrator, None));
-        assert!(!f.keep_visible(IntegratorKind::Naive));
+        assert!(!f.keep_visible(&shown(IntegratorKind::Naive)));
         // Wrapping skips hidden fields too.
         f.selected = Field::Scene;
-        f.select_next(false, IntegratorKind::Path);
+        f.select_next(false, &shown(IntegratorKind::Path));
         assert_eq!(f.field(), Field::Focus);
     }
 }

@@ -1,29 +1,37 @@
 //! The terminal UI: `ptui [SCENE]`.
 //!
-//! One event channel feeds the UI thread: key presses and resizes (input thread), ticks, signals,
-//! render progress (the render session, see [`crate::session`], whose events are mapped into
-//! this channel) and finished saves. The loop waits for an event,
+//! One event channel feeds the UI thread: key presses, the mouse and resizes (input thread),
+//! ticks, signals, changes of the scene's files on disk (`watch`), render progress (the render
+//! session, see [`crate::session`], whose events are mapped into this channel) and finished
+//! saves. The loop waits for an event,
 //! updates the [`app::App`] model, and draws the [`view`] (a function of the model) at most
 //! `--fps` times a second for render progress, at once for a key press. Frames are wrapped in
 //! synchronized-update sequences so the terminal never shows half a frame.
 
 pub mod app;
+pub mod camera;
 pub mod color;
 pub mod dither;
+mod edits;
 pub mod event;
 pub mod form;
 pub mod graphics;
+mod help;
 pub mod layout;
+pub mod pick;
+mod pictures;
 pub mod preview;
 pub mod save;
+pub mod scene_form;
 pub mod term;
 mod text;
 pub mod view;
+pub mod watch;
 
-use crate::session::{Command, SessionHandle};
+use crate::session::{Command, SessionEvent, SessionHandle};
 use crate::settings::SettingsOverrides;
 use anyhow::Context;
-use app::{Action, App};
+use app::{Action, App, Redraw};
 use color::ColorChoice;
 use crossterm::queue;
 use crossterm::terminal::{BeginSynchronizedUpdate, Clear, ClearType, EndSynchronizedUpdate};
@@ -50,7 +58,14 @@ pub struct TuiOptions {
     pub bench_log: Option<PathBuf>,
     /// A film file to continue (`ptui part.film`): `scene` and `cli` are then the film's.
     pub resume: Option<PathBuf>,
+    /// Reload the scene when a file it reads changes on disk.
+    pub watch: bool,
 }
+
+/// How long a lost terminal (SIGHUP) waits for the running batch of passes to end before the
+/// film is written: a film of whole passes continues to the image of a render never stopped.
+/// Past it, the pass is cut short and the film written with it (it still continues).
+const HANGUP_BATCH_WAIT: Duration = Duration::from_secs(30);
 
 pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
     if !std::io::stdout().is_terminal() || !std::io::stdin().is_terminal() {
@@ -108,6 +123,10 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
     event::spawn_input(tx.clone())?;
     event::spawn_tick(tx.clone(), Duration::from_millis(250))?;
     event::spawn_signals(tx.clone())?;
+    let mut watcher = match opts.watch {
+        true => Some(watch::Watcher::spawn(&app.watched, tx.clone())?),
+        false => None,
+    };
     let size = guard.terminal.size()?;
     app.resize(size.width, size.height);
 
@@ -117,6 +136,8 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
     let mut dirty = true;
     let mut urgent = true;
     let mut keys: Vec<Instant> = Vec::new();
+    // The terminal went away (SIGHUP, or it can no longer be read or written): write the film.
+    let mut lost = false;
     let result: anyhow::Result<()> = loop {
         if app.quit {
             break Ok(());
@@ -125,12 +146,25 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
         if urgent || (dirty && due) {
             app.apply_pending();
             if let Err(e) = draw(&mut guard.terminal, &mut app) {
+                lost = true;
                 break Err(e.into());
             }
             let now = Instant::now();
             if let Some(log) = bench.as_mut() {
                 for k in keys.drain(..) {
                     let _ = writeln!(log, "key {:.3}", (now - k).as_secs_f64() * 1e3);
+                }
+                let views = app.views_shown();
+                for k in &views {
+                    let _ = writeln!(log, "view {:.3}", (now - *k).as_secs_f64() * 1e3);
+                }
+                let reloaded = std::mem::take(&mut app.reloaded);
+                if reloaded {
+                    let _ = writeln!(log, "reload");
+                }
+                if !views.is_empty() || reloaded {
+                    // The harness waits for these lines.
+                    let _ = log.flush();
                 }
             }
             keys.clear();
@@ -148,32 +182,24 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
             Err(RecvTimeoutError::Timeout) => None,
             Err(RecvTimeoutError::Disconnected) => break Ok(()),
         };
+        let mut redraw_now = false;
         while let Some(ev) = next {
             match ev {
                 Event::Key(key, at) => {
                     keys.push(at);
                     urgent = true;
-                    match app.on_key(key) {
-                        Some(Action::Start(req)) => worker.send(Command::Start(req)),
-                        Some(Action::Pause(p)) => worker.send(Command::Pause(p)),
-                        Some(Action::Save(kind)) => {
-                            if let Some(snap) = app.snapshot.clone() {
-                                let s = app.settings();
-                                save::spawn_save(
-                                    snap,
-                                    app.scene_name.clone(),
-                                    kind,
-                                    s.exposure,
-                                    s.tonemap,
-                                    tx.clone(),
-                                );
-                            }
-                        }
-                        Some(Action::SaveFilm) => {
-                            worker.send_after_batch(Command::SaveFilm(film_path(&app)));
-                        }
-                        Some(Action::Quit) | None => {}
-                    }
+                    let action = app.on_key(key);
+                    act(action, at, &mut app, &worker, &tx);
+                }
+                Event::Mouse(m, at) => {
+                    let action = app.on_mouse(m);
+                    urgent = true;
+                    act(action, at, &mut app, &worker, &tx);
+                }
+                Event::FilesChanged(files) => {
+                    let action = app.on_files_changed(&files);
+                    urgent = true;
+                    act(action, Instant::now(), &mut app, &worker, &tx);
                 }
                 Event::Resize(w, h) => {
                     // The font may have changed with the window.
@@ -185,13 +211,21 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                     app.resize(w, h);
                     urgent = true;
                 }
-                Event::Render(ev) => dirty |= app.on_worker(ev),
+                Event::Render(ev) => match app.on_worker(ev) {
+                    Redraw::Now => {
+                        urgent = true;
+                        redraw_now = true;
+                    }
+                    Redraw::Later => dirty = true,
+                    Redraw::No => {}
+                },
                 Event::Saved(r) => {
                     app.on_saved(r);
                     dirty = true;
                 }
                 Event::Tick => {
                     dirty |= app.refresh_live();
+                    dirty |= app.expire_flash(Instant::now());
                     if let Some(log) = bench.as_mut() {
                         if last_log.elapsed() >= Duration::from_secs(1) {
                             last_log = Instant::now();
@@ -213,15 +247,27 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
                         }
                     }
                 }
-                Event::Terminate(_) => app.quit = true,
+                Event::Terminate(sig) => {
+                    lost |= sig == signal_hook::consts::SIGHUP;
+                    app.quit = true;
+                }
                 Event::InputError(e) => {
+                    lost = true;
                     app.quit = true;
                     app.fatal = Some(format!("cannot read the terminal: {e}"));
                 }
             }
-            next = rx.try_recv().ok();
+            // A new picture of the view is drawn before anything else queued is taken (a
+            // coarse preview must not wait while the next, finer one is turned into colours).
+            next = if redraw_now { None } else { rx.try_recv().ok() };
+        }
+        if let Some(w) = watcher.as_mut() {
+            w.set(&app.watched);
         }
     };
+    if lost && app.snapshot.is_some() {
+        save_on_hangup(&app, &worker, &rx);
+    }
     worker.shutdown();
     if let Some(log) = bench.as_mut() {
         let _ = log.flush();
@@ -231,6 +277,72 @@ pub fn run(opts: TuiOptions) -> anyhow::Result<()> {
     match app.fatal {
         Some(e) => Err(anyhow::anyhow!(e)),
         None => Ok(()),
+    }
+}
+
+/// Carry out what the app asked for; a render request remembers the moment of the key (or
+/// click) that made it, for the key-to-picture latency.
+fn act(
+    action: Option<Action>,
+    at: Instant,
+    app: &mut App,
+    worker: &SessionHandle,
+    tx: &mpsc::Sender<Event>,
+) {
+    match action {
+        Some(Action::Start(req)) => {
+            app.note_request(req.id, at);
+            worker.send(Command::Start(req));
+        }
+        Some(Action::Update(req)) => worker.send_after_batch(Command::Start(req)),
+        Some(Action::Pause(p)) => worker.send(Command::Pause(p)),
+        Some(Action::Save(kind)) => {
+            if let Some(snap) = app.snapshot.clone() {
+                let s = app.settings();
+                save::spawn_save(
+                    snap,
+                    app.scene_name.clone(),
+                    kind,
+                    s.exposure,
+                    s.tonemap,
+                    tx.clone(),
+                );
+            }
+        }
+        Some(Action::SaveFilm) => {
+            worker.send_after_batch(Command::SaveFilm(film_path(app)));
+        }
+        Some(Action::Quit) | None => {}
+    }
+}
+
+/// The terminal is gone (a dropped SSH session): write the film as `w` does, after the running
+/// batch of passes (so it holds whole passes and continues to the image of a render never
+/// stopped), before leaving. Nothing can be shown any more: the outcome goes to stderr, which
+/// is as gone as the terminal, or to wherever the user sent it.
+fn save_on_hangup(app: &App, worker: &SessionHandle, rx: &mpsc::Receiver<Event>) {
+    let path = film_path(app);
+    worker.send_after_batch(Command::SaveFilm(path.clone()));
+    let mut deadline = Instant::now() + HANGUP_BATCH_WAIT;
+    let mut cut_short = false;
+    loop {
+        match rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+            Ok(Event::Render(SessionEvent::FilmSaved(r))) => {
+                match r {
+                    Ok(p) => eprintln!("terminal lost: wrote {}", p.display()),
+                    Err(e) => eprintln!("terminal lost: the film was not written: {e}"),
+                }
+                return;
+            }
+            Ok(_) => {}
+            Err(RecvTimeoutError::Timeout) if !cut_short => {
+                // The batch is long (a huge image's pass): cut it short and write what it has.
+                worker.send(Command::SaveFilm(path.clone()));
+                deadline = Instant::now() + HANGUP_BATCH_WAIT;
+                cut_short = true;
+            }
+            Err(_) => return,
+        }
     }
 }
 

@@ -11,13 +11,14 @@
 //! drawing only copies them into the ratatui buffer.
 
 use super::color::ColorMode;
-use super::dither::{plan_for, Plan};
+use super::dither::{nearest, plan_for, Plan};
 use crate::io::output::display_rgb;
 use crate::session::Snapshot;
 use crate::settings::Tonemap;
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::Color;
+use std::collections::HashMap;
 
 /// A sub-pixel is redrawn only when one of its display channels moved by more than this many
 /// 8-bit levels since it was last drawn. Sampling noise in a converging preview shrinks below
@@ -142,20 +143,34 @@ struct Key {
     tonemap: Tonemap,
 }
 
+/// Which 256-colour plans an update computes, from least to most work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Plans {
+    /// None (truecolor shows the colours themselves).
+    None,
+    /// The nearest palette entry alone, no dither: for a coarse preview, which must show at
+    /// once (a dither plan costs ~10 us, a whole 120x40 screen of them ~60 ms).
+    Nearest,
+    /// The full dither plan.
+    Dithered,
+}
+
 /// Shown display colours, one per sub-pixel of the preview area (row-major; None = no image).
 #[derive(Default)]
 pub struct PreviewCache {
     key: Option<Key>,
     shown: Vec<Option<[u8; 3]>>,
-    /// The 256-colour dither plan of each shown colour (same layout).
+    /// The 256-colour dither plan of each shown colour (same layout), and which kind it is.
     plans: Vec<Plan>,
+    planned: Vec<Option<Plans>>,
     /// Sub-pixels whose colour changed at the last update (for measuring the hysteresis).
     pub changed: usize,
 }
 
 impl PreviewCache {
     /// Recompute the sub-pixels from `snap`. Within the same view, a sub-pixel keeps its colour
-    /// unless it moved by more than [`HYSTERESIS`]; a new view redraws everything.
+    /// unless it moved by more than [`HYSTERESIS`]; a new view redraws everything. Every colour
+    /// gets its full 256-colour dither plan.
     pub fn update(
         &mut self,
         snap: &Snapshot,
@@ -165,7 +180,31 @@ impl PreviewCache {
         exposure: f64,
         tonemap: Tonemap,
     ) {
-        let image = &*snap.image;
+        self.update_with(
+            snap,
+            area,
+            view,
+            halfblock,
+            exposure,
+            tonemap,
+            Plans::Dithered,
+        )
+    }
+
+    /// [`PreviewCache::update`] computing the plans `plans` asks for: a sub-pixel whose plan is
+    /// of a lesser kind gets a new one even if its colour did not move.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update_with(
+        &mut self,
+        snap: &Snapshot,
+        area: Rect,
+        view: &ViewState,
+        halfblock: bool,
+        exposure: f64,
+        tonemap: Tonemap,
+        plans: Plans,
+    ) {
+        let image = &**snap.picture();
         let film = (image.width(), image.height());
         let geometry = Geometry::new(film, area, view, halfblock);
         let key = Key {
@@ -183,6 +222,8 @@ impl PreviewCache {
             self.shown.resize(len, None);
             self.plans.clear();
             self.plans.resize(len, Plan::default());
+            self.planned.clear();
+            self.planned.resize(len, None);
         }
         self.key = Some(key);
         self.changed = 0;
@@ -191,6 +232,7 @@ impl PreviewCache {
         }
         let width = film.0 as usize;
         let exposure = exposure as f32;
+        let mut memo: HashMap<[u8; 3], Plan> = HashMap::new();
         for j in 0..geometry.size.1 {
             for i in 0..geometry.size.0 {
                 let (x0, x1, y0, y1) = geometry.footprint(i, j, film);
@@ -213,8 +255,18 @@ impl PreviewCache {
                 };
                 if moved {
                     *cell = Some(rgb);
-                    self.plans[at] = plan_for(rgb);
+                    self.planned[at] = None;
                     self.changed += 1;
+                }
+                // A colour kept by the hysteresis may still need a better plan.
+                if plans > Plans::None && self.planned[at] < Some(plans) {
+                    let shown = cell.unwrap_or(rgb);
+                    // A coarse preview's blocks repeat their colours many times over.
+                    self.plans[at] = *memo.entry(shown).or_insert_with(|| match plans {
+                        Plans::Dithered => plan_for(shown),
+                        _ => Plan([nearest(shown); 16]),
+                    });
+                    self.planned[at] = Some(plans);
                 }
             }
         }
@@ -281,6 +333,7 @@ mod tests {
         Snapshot {
             job: 1,
             image: std::sync::Arc::new(crate::render::film::MeanImage::from_rgb(w, h, &rgb)),
+            preview: None,
             stats: RenderStats::default(),
             error: ErrorEstimate::default(),
             target_spp: 1,
@@ -364,6 +417,55 @@ mod tests {
         // A new exposure is a new view: everything is recomputed.
         cache.update(&grey(0.3), area, &view, true, 1.01, Tonemap::Clamp);
         assert_eq!(cache.changed, 16);
+    }
+
+    #[test]
+    fn a_coarse_previews_flat_colours_become_dither_plans_when_the_film_comes() {
+        let area = Rect::new(0, 0, 4, 2);
+        let view = ViewState::default();
+        let snap = snapshot(4, 4, |x, _| [0.1 * x as f32, 0.3, 0.2]);
+        let mut cache = PreviewCache::default();
+        // Truecolor needs no plans; the coarse preview's are the nearest entries alone.
+        cache.update_with(&snap, area, &view, true, 1.0, Tonemap::Clamp, Plans::None);
+        assert!(cache.planned.iter().all(Option::is_none));
+        cache.update_with(
+            &snap,
+            area,
+            &view,
+            true,
+            1.0,
+            Tonemap::Clamp,
+            Plans::Nearest,
+        );
+        assert_eq!(cache.changed, 0, "the colours are the same");
+        for (plan, rgb) in cache.plans.iter().zip(&cache.shown) {
+            assert_eq!(plan.0, [nearest(rgb.unwrap()); 16]);
+        }
+        // The same colours from the film: dithered now, though none moved.
+        cache.update_with(
+            &snap,
+            area,
+            &view,
+            true,
+            1.0,
+            Tonemap::Clamp,
+            Plans::Dithered,
+        );
+        assert_eq!(cache.changed, 0);
+        for (plan, rgb) in cache.plans.iter().zip(&cache.shown) {
+            assert_eq!(*plan, plan_for(rgb.unwrap()));
+        }
+        // A coarse preview again (a new camera move) keeps nothing it does not need.
+        cache.update_with(
+            &snap,
+            area,
+            &view,
+            true,
+            1.0,
+            Tonemap::Clamp,
+            Plans::Nearest,
+        );
+        assert!(cache.planned.iter().all(|p| *p == Some(Plans::Dithered)));
     }
 
     #[test]

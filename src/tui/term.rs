@@ -1,10 +1,11 @@
-//! Terminal hygiene: raw mode and the alternate screen on the way in, everything undone on the
+//! Terminal hygiene: raw mode, the alternate screen and mouse reporting on the way in, everything undone on the
 //! way out, whether by quitting, an error (the guard's `Drop`), a signal (the main loop leaves
 //! normally) or a panic in the UI thread (the panic hook restores before printing). A panic in
 //! any other thread is not printed into the raw-mode screen: the hook records it, and the worker
 //! reports it in the UI.
 
 use crossterm::cursor::{Hide, Show};
+use crossterm::event::{DisableMouseCapture, EnableMouseCapture};
 use crossterm::execute;
 use crossterm::terminal::{
     disable_raw_mode, enable_raw_mode, EndSynchronizedUpdate, EnterAlternateScreen,
@@ -56,7 +57,9 @@ impl TermGuard {
             inner: BufWriter::with_capacity(1 << 20, io::stdout()),
             count: bytes.clone(),
         };
-        let setup = execute!(io::stdout(), EnterAlternateScreen, Hide);
+        // The mouse: clicks pick, drags and the wheel move the camera (terminals that do not
+        // report it ignore the request).
+        let setup = execute!(io::stdout(), EnterAlternateScreen, Hide, EnableMouseCapture);
         let terminal = ratatui::Terminal::new(CrosstermBackend::new(writer));
         match (setup, terminal) {
             (Ok(()), Ok(terminal)) => Ok(TermGuard { terminal, bytes }),
@@ -80,7 +83,7 @@ pub fn restore() {
     let mut out = io::stdout();
     let _ = execute!(out, EndSynchronizedUpdate);
     let _ = out.write_all(super::graphics::cleanup());
-    let _ = execute!(out, LeaveAlternateScreen, Show);
+    let _ = execute!(out, DisableMouseCapture, LeaveAlternateScreen, Show);
     let _ = disable_raw_mode();
     let _ = out.flush();
 }

@@ -13,10 +13,11 @@
 use super::app::{App, Message};
 use super::form::{Field, Shown};
 use super::layout::{layout, MIN_HEIGHT, MIN_WIDTH};
+use super::pick;
 use super::text::{clip_left, clip_right, clip_words, fit_parts, fmt_duration, wrap_words};
 use crate::session::{JobStatus, Snapshot};
 use ratatui::layout::{Constraint, Layout, Rect};
-use ratatui::style::{Color, Modifier, Style, Stylize};
+use ratatui::style::{Color, Style, Stylize};
 use ratatui::symbols::Marker;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{
@@ -45,6 +46,7 @@ pub fn draw(frame: &mut Frame, app: &App) {
         if app.graphics.is_none() {
             app.preview
                 .draw(frame.buffer_mut(), preview, app.color_mode);
+            draw_marks(frame, app, preview);
         }
     } else {
         frame.render_widget(Paragraph::new("starting…").dark_gray(), preview);
@@ -55,9 +57,30 @@ pub fn draw(frame: &mut Frame, app: &App) {
     draw_gauge(frame, app, areas.gauge);
     draw_status(frame, app, areas.status);
     if app.show_help {
-        draw_help(frame, area);
+        super::help::draw_help(frame, area);
     } else if app.show_details {
         draw_details(frame, app, area);
+    }
+}
+
+/// Over the cell preview: the picked object's outline while it shows, and a crosshair at the
+/// preview's centre in camera mode and with the outline.
+fn draw_marks(frame: &mut Frame, app: &App, area: Rect) {
+    let Some(g) = app.preview.geometry() else {
+        return;
+    };
+    let flash = app
+        .flash
+        .as_ref()
+        .filter(|f| f.area == area && f.geometry == g);
+    if let Some(f) = flash {
+        pick::draw_outline(frame.buffer_mut(), f);
+    }
+    if app.camera_mode || flash.is_some_and(|f| f.at_centre) {
+        let (fx, fy) = app.centre();
+        if let Some(cell) = pick::cell_of(&g, area, fx, fy) {
+            pick::draw_crosshair(frame.buffer_mut(), cell);
+        }
     }
 }
 
@@ -98,14 +121,25 @@ fn draw_title(frame: &mut Frame, app: &App, area: Rect) {
         area.width as usize
     };
     let scene = clip_left(&app.scene_name, 24);
-    let parts = vec![
+    // A scene edited in the TUI and not written back (W) is marked.
+    let unsaved = if app.doc.as_ref().is_some_and(|d| d.dirty()) {
+        "*"
+    } else {
+        ""
+    };
+    let mut parts = vec![
         Span::styled(" ptui ", Style::new().bold().reversed()),
-        Span::raw(format!("  {scene} {}x{}", s.width, s.height)),
+        Span::raw(format!("  {scene}{unsaved} {}x{}", s.width, s.height)),
         Span::styled(format!("  {}", state_name(app)), Style::new().bold()),
+    ];
+    if app.camera_mode {
+        parts.push(Span::styled("  camera mode", Style::new().bold().yellow()));
+    }
+    parts.extend([
         Span::raw(format!("  zoom {zoom}")),
         Span::raw(format!("  {mode}")),
         Span::raw(format!("  {shape}")),
-    ];
+    ]);
     frame.render_widget(fit_parts(parts, room), area);
     if area.width >= 60 {
         frame.render_widget(Line::from(help).right_aligned().dark_gray(), area);
@@ -125,21 +159,49 @@ fn draw_form(frame: &mut Frame, app: &App, area: Rect) {
         threads: app.threads,
         lens: app.lens(),
     };
-    // The painterly knobs only while that integrator is in effect.
-    let fields: Vec<Field> = Field::visible(s.integrator).collect();
-    let index = fields
+    // The painterly knobs only while that integrator is in effect; the scene's fields after
+    // the render's, each group under a heading.
+    let mut rows: Vec<Option<Field>> = Vec::new();
+    let heading = |rows: &mut Vec<Option<Field>>, f: Field| {
+        let first = match f {
+            Field::EnvIntensity => true,
+            Field::Object(_) => !rows.iter().any(|r| matches!(r, Some(Field::Object(_)))),
+            _ => false,
+        };
+        if first {
+            rows.push(None);
+        }
+        rows.push(Some(f));
+    };
+    for f in app.fields() {
+        heading(&mut rows, f);
+    }
+    let index = rows
         .iter()
-        .position(|&f| f == app.form.selected)
+        .position(|&f| f == Some(app.form.selected))
         .unwrap_or(0);
     // Scroll so the selected field stays visible in short terminals.
-    let rows = inner.height.max(1) as usize;
-    let first = index.saturating_sub(rows - 1);
+    let height = inner.height.max(1) as usize;
+    let first = index.saturating_sub(height - 1);
     let value_w = (inner.width as usize).saturating_sub(LABEL + 1);
-    let lines: Vec<Line> = fields
+    let lines: Vec<Line> = rows
         .iter()
+        .enumerate()
         .skip(first)
-        .take(rows)
-        .map(|&field| {
+        .take(height)
+        .map(|(k, row)| {
+            let Some(field) = *row else {
+                let title = match rows.get(k + 1) {
+                    Some(Some(Field::EnvIntensity)) => "environment".to_string(),
+                    _ => app
+                        .picked
+                        .as_ref()
+                        .map_or(String::new(), |p| p.object.label()),
+                };
+                let text = format!("─ {} ", clip_left(&title, inner.width as usize - 3));
+                let fill = (inner.width as usize).saturating_sub(text.chars().count());
+                return Line::from(format!("{text}{}", "─".repeat(fill))).dark_gray();
+            };
             let selected = field == app.form.selected;
             let value = match (&app.form.editing, selected) {
                 (Some(text), true) => Span::styled(
@@ -148,8 +210,10 @@ fn draw_form(frame: &mut Frame, app: &App, area: Rect) {
                 ),
                 // A name from a short list reads best by its start, typed text and paths by
                 // their end.
-                _ if field.cycles() => Span::raw(clip_right(&app.form.value(field, &now), value_w)),
-                _ => Span::raw(clip_left(&app.form.value(field, &now), value_w)),
+                _ if field.cycles() => {
+                    Span::raw(clip_right(&app.field_value(field, &now), value_w))
+                }
+                _ => Span::raw(clip_left(&app.field_value(field, &now), value_w)),
             };
             let label = format!(" {:<w$}", field.label(), w = LABEL - 1);
             let label_style = if selected {
@@ -411,75 +475,6 @@ fn draw_chart(frame: &mut Frame, app: &App, area: Rect) {
     frame.render_widget(chart, area);
 }
 
-const HELP: &[(&str, &str)] = &[
-    ("Tab / Shift-Tab", "select a form field"),
-    ("Enter", "edit the field, or cycle one with a few values"),
-    // The fields that cycle, from `Field::cycling` (so the list cannot drift from the code).
-    ("", CYCLING),
-    (
-        "integrator",
-        "painterly shows its hemisphere, correl(ation),",
-    ),
-    ("", "stroke and strength fields right below it"),
-    (
-        "Enter / Esc",
-        "while editing: apply / cancel (Ctrl-U clears)",
-    ),
-    ("space", "pause / resume the render"),
-    ("r", "restart the render from zero samples"),
-    ("s / e", "save the full-resolution PNG / linear EXR"),
-    ("+ / -  0", "zoom in (down to 1:1) / out, fit"),
-    ("arrows / hjkl", "pan the zoomed preview"),
-    ("F", "focus the lens on what the preview's centre shows"),
-    ("c", "toggle truecolor / 256 colours"),
-    ("f", "toggle half-blocks / spaces only"),
-    ("g", "toggle the error-vs-time chart"),
-    ("i", "details: settings, timings, what the build chose"),
-    ("?", "this help (any key closes it)"),
-    ("q / Esc / Ctrl-C", "quit"),
-];
-
-/// Where [`HELP`] lists the fields that cycle (wrapped: it may take two lines).
-const CYCLING: &str = "{the fields that cycle}";
-
-fn draw_help(frame: &mut Frame, area: Rect) {
-    // The list of fields that cycle, wrapped to the popup (its key column is 18 wide).
-    let cycling = wrap_words(&format!("({})", Field::cycling()), 48);
-    let lines: Vec<Line> = HELP
-        .iter()
-        .flat_map(|&(k, what)| {
-            let texts = if what == CYCLING {
-                cycling.clone()
-            } else {
-                vec![what.to_string()]
-            };
-            texts.into_iter().map(move |text| {
-                Line::from(vec![
-                    Span::styled(format!(" {k:<17}"), Style::new().bold().yellow()),
-                    Span::raw(text),
-                ])
-            })
-        })
-        .collect();
-    let w = 70.min(area.width);
-    let h = (lines.len() as u16 + 2).min(area.height);
-    let popup = Rect::new(
-        area.x + (area.width - w) / 2,
-        area.y + (area.height - h) / 2,
-        w,
-        h,
-    );
-    frame.render_widget(Clear, popup);
-    frame.render_widget(
-        Paragraph::new(lines).block(
-            Block::bordered()
-                .title(" keys ")
-                .style(Style::new().add_modifier(Modifier::empty())),
-        ),
-        popup,
-    );
-}
-
 /// The details view (`i`): the settings and timings of the current render and the build's
 /// notes in full, each value word-wrapped beside its label.
 fn draw_details(frame: &mut Frame, app: &App, area: Rect) {
@@ -678,6 +673,7 @@ mod tests {
         let snap = Snapshot {
             job: 1,
             image: Arc::new(MeanImage::from_rgb(fw, fh, &rgb)),
+            preview: None,
             stats: RenderStats {
                 passes: 32,
                 complete_passes: 32,

@@ -327,6 +327,7 @@ fn snapshot(w: u32, h: u32, f: impl Fn(u32, u32) -> [f32; 3]) -> Snapshot {
     Snapshot {
         job: 1,
         image: Arc::new(MeanImage::from_rgb(w, h, &rgb)),
+        preview: None,
         stats: Default::default(),
         error: Default::default(),
         target_spp: 1,

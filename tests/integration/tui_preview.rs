@@ -148,6 +148,7 @@ fn cornell() -> Snapshot {
     Snapshot {
         job: 1,
         image: r.film().mean_image(),
+        preview: None,
         stats: r.stats(),
         error: Default::default(),
         target_spp: 16,
@@ -206,6 +207,7 @@ fn a_neutral_grey_ramp_maps_to_neutral_cells_only() {
     let snap = Snapshot {
         job: 1,
         image: Arc::new(ptui::render::film::MeanImage::from_rgb(w, h, &rgb)),
+        preview: None,
         stats: Default::default(),
         error: Default::default(),
         target_spp: 1,

@@ -103,7 +103,7 @@ impl CausticTracer {
             ));
         }
         let mut targets = Vec::new();
-        for p in &scene.prims {
+        for p in scene.prims.iter() {
             if !scene.materials[p.material as usize].is_delta() {
                 continue;
             }

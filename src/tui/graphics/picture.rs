@@ -132,7 +132,7 @@ impl Picture {
         exposure: f64,
         tonemap: Tonemap,
     ) {
-        let image = &*snap.image;
+        let image = &**snap.picture();
         let film = (image.width(), image.height());
         let (cw, ch) = self.cell;
         let display = (
