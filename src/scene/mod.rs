@@ -11,6 +11,7 @@ pub mod gltf;
 pub mod gltf_material;
 pub mod gltf_outline;
 pub mod load;
+mod load_mesh;
 pub mod materials;
 pub mod mesh;
 pub mod model;
