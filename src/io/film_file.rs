@@ -360,9 +360,10 @@ impl FilmHeader {
     }
 }
 
-/// The hash of a scene: SHA-256 over the scene's source and every mesh file it names (each
-/// preceded by its path as written and its length), so a changed OBJ beside an unchanged
-/// scene file is another scene. `spec` is what `ptui render` takes: a file, else a built-in.
+/// The hash of a scene: SHA-256 over the scene's source, every mesh file and the environment
+/// map it names (each preceded by its path as written and its length), so a changed OBJ or
+/// map beside an unchanged scene file is another scene. The files those read in turn (an
+/// OBJ's .mtl and textures, a glTF's buffers and images) are not in it (docs/FILM.md). `spec` is what `ptui render` takes: a file, else a built-in.
 pub fn scene_hash(spec: &str) -> Result<String, String> {
     use crate::scene::load::{scene_text, SceneText};
     let path = Path::new(spec);
@@ -392,20 +393,34 @@ pub fn scene_hash(spec: &str) -> Result<String, String> {
     h.update((src.len() as u64).to_le_bytes());
     h.update(src.as_bytes());
     let desc = crate::scene::load::parse(&src, spec).map_err(|e| e.to_string())?;
-    for m in &desc.mesh {
-        if let Some(p) = &m.path {
-            let full = match &base {
-                Some(b) => b.join(p.get_ref()),
-                None => PathBuf::from(p.get_ref()),
-            };
-            let source = crate::input::Source::Path(full);
-            let bytes = crate::input::read(&source, "OBJ file", crate::input::Content::Binary)
-                .map_err(|e| e.to_string())?;
-            h.update((p.get_ref().len() as u64).to_le_bytes());
-            h.update(p.get_ref().as_bytes());
-            h.update((bytes.len() as u64).to_le_bytes());
-            h.update(&bytes);
-        }
+    // The files as the scene writes them (not resolved: shards rendered in other directories
+    // share a hash), each with what it is for the error message.
+    let mut named: Vec<(&str, &str)> = desc
+        .mesh
+        .iter()
+        .filter_map(|m| m.path.as_ref())
+        .map(|p| (p.get_ref().as_str(), "mesh file"))
+        .collect();
+    if let Some(map) = desc
+        .environment
+        .as_ref()
+        .and_then(|e| e.get_ref().map.as_ref())
+        .filter(|m| m.get_ref() != crate::scene::BUILTIN_SKY)
+    {
+        named.push((map.get_ref().as_str(), "environment map"));
+    }
+    for (p, what) in named {
+        let full = match &base {
+            Some(b) => b.join(p),
+            None => PathBuf::from(p),
+        };
+        let source = crate::input::Source::Path(full);
+        let bytes = crate::input::read(&source, what, crate::input::Content::Binary)
+            .map_err(|e| e.to_string())?;
+        h.update((p.len() as u64).to_le_bytes());
+        h.update(p.as_bytes());
+        h.update((bytes.len() as u64).to_le_bytes());
+        h.update(&bytes);
     }
     let digest = h.finalize();
     let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();

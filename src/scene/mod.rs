@@ -36,6 +36,7 @@ use std::time::Duration;
 pub use camera::DEFAULT_VFOV;
 pub use error::SceneError;
 pub use load::{load, load_str, load_str_with, load_text, load_with, BuildOptions};
+pub use sky::BUILTIN_SKY;
 
 /// Most triangles all meshes of one scene may hold together, whatever the memory: the BVH
 /// indexes nodes and primitives with u32, and a tree has fewer than two nodes per primitive.

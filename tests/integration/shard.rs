@@ -575,3 +575,34 @@ fn the_tui_worker_saves_and_continues_films() {
     let (_, film, _) = film_file::read(&continued).expect("read");
     assert!(same_bits(&film, straight.film()));
 }
+
+/// A film's scene hash covers the files the scene names (a mesh and an environment map): a
+/// change to either is another scene, while the same files in another directory (a shard on
+/// another machine) are the same scene.
+#[test]
+fn the_scene_hash_covers_the_mesh_and_the_map_but_not_the_directory() {
+    let write_scene = |dir: &Path, map_texel: f32, z: f32| {
+        std::fs::write(
+            dir.join("tri.obj"),
+            format!("v 0 0 {z}\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+        )
+        .expect("obj");
+        let map = image::Rgb32FImage::from_pixel(4, 2, image::Rgb([map_texel; 3]));
+        map.save(dir.join("sky.exr")).expect("exr");
+        let scene = dir.join("s.toml");
+        std::fs::write(
+            &scene,
+            "[[mesh]]\npath = \"tri.obj\"\n[environment]\nmap = \"sky.exr\"\n",
+        )
+        .expect("scene");
+        film_file::scene_hash(scene.to_str().expect("utf-8 path")).expect("hash")
+    };
+    let (a, b) = (
+        tempfile::tempdir().expect("dir"),
+        tempfile::tempdir().expect("dir"),
+    );
+    let base = write_scene(a.path(), 1.0, 0.0);
+    assert_eq!(write_scene(b.path(), 1.0, 0.0), base, "another directory");
+    assert_ne!(write_scene(b.path(), 2.0, 0.0), base, "another map");
+    assert_ne!(write_scene(b.path(), 1.0, 0.5), base, "another mesh");
+}
