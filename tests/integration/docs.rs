@@ -423,7 +423,7 @@ fn gitignored() -> Vec<String> {
     std::fs::read_to_string(root().join(".gitignore"))
         .expect(".gitignore")
         .lines()
-        .map(|l| l.trim().trim_start_matches('/').to_string())
+        .map(|l| l.trim().trim_matches('/').to_string())
         .filter(|l| !l.is_empty() && !l.starts_with('#'))
         .collect()
 }
