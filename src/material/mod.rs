@@ -206,6 +206,25 @@ impl BsdfEval {
     };
 }
 
+impl BsdfSample {
+    /// The sample `wi` of a lobe mixture whose density is `e`'s own pdf (the mixture's
+    /// evaluation at the drawn direction): weight f cos / pdf, None where either is unusable.
+    #[inline]
+    pub fn from_eval(wi: DVec3, e: BsdfEval) -> Option<BsdfSample> {
+        if !(e.pdf > 0.0 && e.pdf.is_finite()) {
+            return None;
+        }
+        let weight = e.f_cos / e.pdf;
+        weight.is_finite().then_some(BsdfSample {
+            wi,
+            weight,
+            pdf: e.pdf,
+            delta: false,
+            eta_scale: 1.0,
+        })
+    }
+}
+
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0

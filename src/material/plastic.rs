@@ -177,17 +177,7 @@ impl Plastic {
             return None;
         }
         let e = self.eval_local(color, wo_l, wi_l, t_o, p_spec);
-        if !(e.pdf > 0.0 && e.pdf.is_finite()) {
-            return None;
-        }
-        let weight = e.f_cos / e.pdf;
-        weight.is_finite().then_some(BsdfSample {
-            wi,
-            weight,
-            pdf: e.pdf,
-            delta: false,
-            eta_scale: 1.0,
-        })
+        BsdfSample::from_eval(wi, e)
     }
 
     #[inline]
