@@ -72,6 +72,25 @@ pub fn render(scene: Arc<Scene>, layer: &SettingsOverrides) -> Renderer {
     r
 }
 
+/// `scene` at 160x120 with `spp` independent samples per pixel, no adaptive sampling, the
+/// scene's seed unless `seed` is given; no sample may be invalid.
+pub fn render_160x120(scene: Scene, spp: u32, seed: Option<u64>) -> Renderer {
+    let r = render(
+        Arc::new(scene),
+        &SettingsOverrides {
+            width: Some(160),
+            height: Some(120),
+            spp: Some(spp),
+            seed,
+            sampler: Some(SamplerKind::Independent),
+            adaptive: Some(false),
+            ..Default::default()
+        },
+    );
+    assert_eq!(r.stats().invalid, 0, "invalid samples");
+    r
+}
+
 pub fn load_str(src: &str) -> Arc<Scene> {
     Arc::new(scene::load_str(src, "test.toml").unwrap_or_else(|e| panic!("{e}")))
 }

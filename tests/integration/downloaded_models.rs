@@ -10,13 +10,8 @@
 //!   .bin and PNG beside it.
 
 use crate::common::{self, Length};
-use ptui::render::Renderer;
-use ptui::sampling::SamplerKind;
 use ptui::scene::{self, BuildOptions, Scene};
-use ptui::settings::{RenderSettings, SettingsOverrides};
 use std::path::PathBuf;
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 
 fn scenes() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes")
@@ -70,22 +65,9 @@ fn a_downloaded_obj_with_its_mtl_renders_as_mitsuba_renders_it_to_1024_spp() {
 
 /// 160x120 at `spp` independent samples per pixel; no invalid sample.
 fn render(scene: Scene, spp: u32) -> Vec<f32> {
-    let scene = Arc::new(scene);
-    let settings = RenderSettings::merged(&[
-        &scene.render,
-        &SettingsOverrides {
-            width: Some(160),
-            height: Some(120),
-            spp: Some(spp),
-            sampler: Some(SamplerKind::Independent),
-            adaptive: Some(false),
-            ..Default::default()
-        },
-    ]);
-    let mut r = Renderer::new(scene, settings).expect("settings");
-    r.render(&AtomicBool::new(false), |_| true);
-    assert_eq!(r.stats().invalid, 0, "invalid samples");
-    r.film().mean_rgb_f32()
+    common::render_160x120(scene, spp, None)
+        .film()
+        .mean_rgb_f32()
 }
 
 /// The mean red over blue of the pixels in [x0, x1) x [y0, y1) of a 160-wide image.

@@ -5,12 +5,8 @@
 use crate::common;
 use ptui::analysis::reference;
 use ptui::render::Renderer;
-use ptui::sampling::SamplerKind;
 use ptui::scene;
-use ptui::settings::{RenderSettings, SettingsOverrides};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 use std::time::Instant;
 
 fn textured_dir() -> PathBuf {
@@ -19,23 +15,7 @@ fn textured_dir() -> PathBuf {
 
 /// `scene`'s render at 160x120 with `spp` independent samples per pixel (no adaptive sampling).
 fn render(scene: scene::Scene, spp: u32, seed: u64) -> Renderer {
-    let scene = Arc::new(scene);
-    let settings = RenderSettings::merged(&[
-        &scene.render,
-        &SettingsOverrides {
-            width: Some(160),
-            height: Some(120),
-            spp: Some(spp),
-            seed: Some(seed),
-            sampler: Some(SamplerKind::Independent),
-            adaptive: Some(false),
-            ..Default::default()
-        },
-    ]);
-    let mut r = Renderer::new(scene, settings).expect("settings");
-    r.render(&AtomicBool::new(false), |_| true);
-    assert_eq!(r.stats().invalid, 0);
-    r
+    common::render_160x120(scene, spp, Some(seed))
 }
 
 fn load(name: &str) -> scene::Scene {
