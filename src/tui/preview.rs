@@ -425,46 +425,25 @@ mod tests {
         let view = ViewState::default();
         let snap = snapshot(4, 4, |x, _| [0.1 * x as f32, 0.3, 0.2]);
         let mut cache = PreviewCache::default();
+        let update = |cache: &mut PreviewCache, plans| {
+            cache.update_with(&snap, area, &view, true, 1.0, Tonemap::Clamp, plans)
+        };
         // Truecolor needs no plans; the coarse preview's are the nearest entries alone.
-        cache.update_with(&snap, area, &view, true, 1.0, Tonemap::Clamp, Plans::None);
+        update(&mut cache, Plans::None);
         assert!(cache.planned.iter().all(Option::is_none));
-        cache.update_with(
-            &snap,
-            area,
-            &view,
-            true,
-            1.0,
-            Tonemap::Clamp,
-            Plans::Nearest,
-        );
+        update(&mut cache, Plans::Nearest);
         assert_eq!(cache.changed, 0, "the colours are the same");
         for (plan, rgb) in cache.plans.iter().zip(&cache.shown) {
             assert_eq!(plan.0, [nearest(rgb.unwrap()); 16]);
         }
         // The same colours from the film: dithered now, though none moved.
-        cache.update_with(
-            &snap,
-            area,
-            &view,
-            true,
-            1.0,
-            Tonemap::Clamp,
-            Plans::Dithered,
-        );
+        update(&mut cache, Plans::Dithered);
         assert_eq!(cache.changed, 0);
         for (plan, rgb) in cache.plans.iter().zip(&cache.shown) {
             assert_eq!(*plan, plan_for(rgb.unwrap()));
         }
         // A coarse preview again (a new camera move) keeps nothing it does not need.
-        cache.update_with(
-            &snap,
-            area,
-            &view,
-            true,
-            1.0,
-            Tonemap::Clamp,
-            Plans::Nearest,
-        );
+        update(&mut cache, Plans::Nearest);
         assert!(cache.planned.iter().all(|p| *p == Some(Plans::Dithered)));
     }
 
