@@ -83,15 +83,9 @@ impl SceneTextures {
         let (b1, b2) = (hit.uv[0] as f64, hit.uv[1] as f64);
         match shape {
             Shape::Sphere(s) => sphere_uv((hit.p - s.center) / s.radius),
-            Shape::Triangle(_) => match self.uvs.get(hit.prim as usize).copied().flatten() {
-                Some(c) => {
-                    let b0 = 1.0 - b1 - b2;
-                    let at =
-                        |k: usize| c[0][k] as f64 * b0 + c[1][k] as f64 * b1 + c[2][k] as f64 * b2;
-                    [at(0), at(1)]
-                }
-                None => [b1, b2],
-            },
+            Shape::Triangle(_) => {
+                triangle_uv(self.uvs.get(hit.prim as usize).copied().flatten(), b1, b2)
+            }
         }
     }
 
@@ -138,6 +132,18 @@ impl SceneTextures {
     }
 }
 
+/// The texture coordinates at barycentrics (b1, b2) of a triangle with coordinates `c` at its
+/// corners; without them, the barycentrics themselves.
+#[inline]
+fn triangle_uv(c: Option<[[f32; 2]; 3]>, b1: f64, b2: f64) -> Uv {
+    let Some(c) = c else {
+        return [b1, b2];
+    };
+    let b0 = 1.0 - b1 - b2;
+    let at = |k: usize| c[0][k] as f64 * b0 + c[1][k] as f64 * b1 + c[2][k] as f64 * b2;
+    [at(0), at(1)]
+}
+
 /// The mean of a textured emission over a triangle with corner coordinates `uv` (None: the
 /// barycentrics), from a 4 x 4 stratified grid of points: the light's power for choosing among
 /// lights. A triangle whose points all read black is not sampled as a light; its emission is
@@ -149,16 +155,7 @@ pub fn mean_over_triangle(t: &Texture, uv: Option<[[f32; 2]; 3]>) -> DVec3 {
         for j in 0..N {
             let u = ((i as f64 + 0.5) / N as f64, (j as f64 + 0.5) / N as f64);
             let (b1, b2) = crate::sampling::warp::uniform_triangle(u);
-            let at = match uv {
-                Some(c) => {
-                    let b0 = 1.0 - b1 - b2;
-                    let f =
-                        |k: usize| c[0][k] as f64 * b0 + c[1][k] as f64 * b1 + c[2][k] as f64 * b2;
-                    [f(0), f(1)]
-                }
-                None => [b1, b2],
-            };
-            sum += t.rgb(at);
+            sum += t.rgb(triangle_uv(uv, b1, b2));
         }
     }
     sum / (N * N) as f64
