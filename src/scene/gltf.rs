@@ -455,33 +455,23 @@ fn add_primitive(
     let pos_acc = prim
         .get(&Semantic::Positions)
         .ok_or_else(|| format!("{shown}: a primitive has no POSITION"))?;
-    check_accessor(&pos_acc, &float3, &[DataType::F32], buffers).map_err(|e| fail(&pos_acc, e))?;
+    // Each accessor read below, checked against its buffer first (absent ones are not read).
+    let check = |a: Option<&gltf::Accessor>, dims: &[Dimensions], types: &[DataType]| {
+        a.map_or(Ok(()), |a| {
+            check_accessor(a, dims, types, buffers).map_err(|e| fail(a, e))
+        })
+    };
+    check(Some(&pos_acc), &float3, &[DataType::F32])?;
     let normal_acc = prim
         .get(&Semantic::Normals)
         .filter(|_| smooth != Some(false));
-    if let Some(a) = &normal_acc {
-        check_accessor(a, &float3, &[DataType::F32], buffers).map_err(|e| fail(a, e))?;
-    }
+    check(normal_acc.as_ref(), &float3, &[DataType::F32])?;
     let uv_acc = prim.get(&Semantic::TexCoords(0));
-    if let Some(a) = &uv_acc {
-        check_accessor(
-            a,
-            &[Dimensions::Vec2],
-            &[DataType::F32, DataType::U8, DataType::U16],
-            buffers,
-        )
-        .map_err(|e| fail(a, e))?;
-    }
+    let uv_types = [DataType::F32, DataType::U8, DataType::U16];
+    check(uv_acc.as_ref(), &[Dimensions::Vec2], &uv_types)?;
     let index_acc = prim.indices();
-    if let Some(a) = &index_acc {
-        check_accessor(
-            a,
-            &[Dimensions::Scalar],
-            &[DataType::U8, DataType::U16, DataType::U32],
-            buffers,
-        )
-        .map_err(|e| fail(a, e))?;
-    }
+    let index_types = [DataType::U8, DataType::U16, DataType::U32];
+    check(index_acc.as_ref(), &[Dimensions::Scalar], &index_types)?;
     let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     let positions: Vec<[f32; 3]> = reader
         .read_positions()
